@@ -1,0 +1,31 @@
+"""Test set-up shared by every test module: float64 on (as the entry points do), and the
+simulations that several tests read, run once per session (JAX compiles take seconds)."""
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import pytest  # noqa: E402
+
+PAPER_SPEED = 56.3 / 3.6  # m/s, the paper's impact speed
+
+
+@pytest.fixture(scope="session")
+def a4():
+    from sim import load_vehicle
+
+    return load_vehicle("audi_a4")
+
+
+@pytest.fixture(scope="session")
+def identified_run(a4):
+    from sim import named_params, simulate
+
+    return simulate(named_params("paper_identified"), a4, PAPER_SPEED)
+
+
+@pytest.fixture(scope="session")
+def default_run(a4):
+    from sim import named_params, simulate
+
+    return simulate(named_params("vsim_default"), a4, PAPER_SPEED)

@@ -1,0 +1,139 @@
+"""Vehicle files and parameter sets: what ships loads, bad configuration fails loudly."""
+
+import math
+import tomllib
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from sim import ConfigError, list_param_sets, list_vehicles, load_params, load_vehicle, make_params, simulate
+from sim._paths import VEHICLE_DIR
+from sim.vehicle import vehicle_from_dict
+
+A4_FILE = VEHICLE_DIR / "audi_a4.toml"
+
+
+def a4_dict():
+    with open(A4_FILE, "rb") as f:
+        return tomllib.load(f)
+
+
+def test_shipped_vehicles_load_with_consistent_outlines():
+    names = list_vehicles()
+    assert {"audi_a4", "toyota_camry_2018"} <= set(names) and len(names) >= 4
+    for name in names:
+        v = load_vehicle(name)
+        outline = np.asarray(v.silhouette_side)
+        assert outline.shape[0] >= 10
+        assert outline[:, 0].max() == pytest.approx(float(v.length), abs=0.01)
+        assert outline[:, 1].max() == pytest.approx(float(v.height), abs=0.01)
+        assert 0.0 < v.windscreen_top[0] < float(v.length)
+        loads = np.asarray(v.static_axle_loads)
+        assert loads.sum() == pytest.approx(float(v.mass) * 9.81)
+
+
+def test_named_parameter_sets_are_the_papers_table_1():
+    assert {"vsim_default", "paper_identified"} <= set(list_param_sets())
+    p = load_params("paper_identified")
+    assert float(p.k_compression) == 970e3 and float(p.k_restitution) == 600e3
+    assert float(p.restitution) == 0.17 and float(p.dz_contact) == -0.21
+    d = load_params("vsim_default")
+    assert float(d.k_compression) == float(d.k_restitution) == 730e3 and float(d.dz_contact) == 0.0
+
+
+@pytest.mark.parametrize(
+    "edit, field",
+    [
+        ({"mass": -1670.0}, "mass"),
+        ({"pitch_inertia": 0.0}, "pitch_inertia"),
+        ({"contact_area": "big"}, "contact_area"),
+        ({"cg_to_front_axle": 3.0}, "cg_to_front_axle"),
+        ({"axle_stiffness": [95000.0]}, "axle_stiffness"),
+        ({"axle_damping": [-1.0, 5000.0]}, "axle_damping"),
+        ({"wheel_radius": math.nan}, "wheel_radius"),
+    ],
+)
+def test_bad_vehicle_field_is_named(edit, field):
+    d = {**a4_dict(), **edit}
+    with pytest.raises(ConfigError, match=field):
+        vehicle_from_dict(d, source="test.toml")
+
+
+def test_missing_vehicle_field_is_named(tmp_path):
+    d = a4_dict()
+    del d["wheelbase"]
+    text = "\n".join(f"{k} = {v!r}" if not isinstance(v, str) else f'{k} = "{v}"' for k, v in d.items())
+    path = tmp_path / "car.toml"
+    path.write_text(text.replace("(", "[").replace(")", "]"))
+    with pytest.raises(ConfigError, match="missing field 'wheelbase'"):
+        load_vehicle(path)
+
+
+def test_unknown_vehicle_lists_known_ones():
+    with pytest.raises(ConfigError, match="unknown vehicle 'audi_a5'.*audi_a4"):
+        load_vehicle("audi_a5")
+
+
+def test_optional_suspension_defaults_follow_ride_frequency():
+    d = a4_dict()
+    del d["axle_stiffness"], d["axle_damping"]
+    v = vehicle_from_dict(d)
+    axle_mass = np.asarray(v.static_axle_loads) / 9.81
+    freq = np.sqrt(np.asarray(v.axle_stiffness) / axle_mass) / (2 * np.pi)
+    np.testing.assert_allclose(freq, [1.4, 1.6])
+
+
+@pytest.mark.parametrize(
+    "values, field",
+    [
+        ({"restitution": 1.2}, "restitution"),
+        ({"restitution": -0.1}, "restitution"),
+        ({"k_compression": -5.0}, "k_compression"),
+        ({"k_restitution": 0.0}, "k_restitution"),
+        ({"mu_slip": math.inf}, "mu_slip"),
+        ({"restitution": 0.9, "k_restitution": 300e3}, "restitution"),  # line would end below 0
+    ],
+)
+def test_bad_parameter_is_named_not_clamped(values, field):
+    base = {"k_compression": 970e3, "k_restitution": 600e3, "restitution": 0.17, "dz_contact": -0.21}
+    with pytest.raises(ConfigError, match=f"'{field}'"):
+        make_params(**{**base, **values})
+
+
+def test_unknown_or_missing_parameter_in_file(tmp_path):
+    path = tmp_path / "p.json"
+    path.write_text('{"parameters": {"k_compression": {"value": 9e5}, "stifness": 1}}')
+    with pytest.raises(ConfigError, match="unknown parameter 'stifness'"):
+        load_params(path)
+    path.write_text('{"parameters": {"k_compression": {"value": 9e5}}}')
+    with pytest.raises(ConfigError, match="missing parameter 'k_restitution'"):
+        load_params(path)
+
+
+def test_result_json_shaped_file_loads(tmp_path):
+    path = tmp_path / "result.json"
+    path.write_text(
+        '{"vehicle": "audi_a4", "parameters": {"k_compression": {"value": 970000.0, "unit": "N/m^3", "std": 5000.0},'
+        ' "k_restitution": {"value": 600000.0}, "restitution": {"value": 0.17}, "dz_contact": {"value": -0.21}}}'
+    )
+    p = load_params(path)
+    assert float(p.k_compression) == 970e3 and float(p.mu_slip) == 0.8
+
+
+def test_simulate_rejects_bad_speed(a4):
+    p = load_params("paper_identified")
+    for speed in (0.0, -3.0, math.nan, 500.0):
+        with pytest.raises(ConfigError, match="impact speed"):
+            simulate(p, a4, speed)
+
+
+def test_batch_validation_names_the_bad_member():
+    from sim import validate_params
+
+    p = make_params(k_compression=970e3, k_restitution=600e3, restitution=0.17, dz_contact=-0.21)
+    import dataclasses
+
+    batch = dataclasses.replace(p, restitution=jnp.array([0.1, 1.5]))
+    with pytest.raises(ConfigError, match="restitution.*1.5"):
+        validate_params(batch)

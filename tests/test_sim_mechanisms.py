@@ -1,0 +1,47 @@
+"""Each optional mechanism is off by default and changes the force law as its equation says."""
+
+import dataclasses
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from conftest import PAPER_SPEED
+from sim import MECHANISMS, ProgressiveStiffness, RateDependence, StiffnessZone, named_params, simulate
+from sim.contact import loading_force
+
+
+def test_every_effect_of_the_interface_is_a_mechanism_with_an_explanation():
+    assert {"front_wheel_block", "stiffness_zone", "progressive_stiffness", "rate_dependence"} <= set(MECHANISMS)
+    for cls in MECHANISMS.values():
+        assert cls.explanation.endswith(".") and len(cls.explanation) > 40
+        assert cls.units
+
+
+def test_base_params_have_no_mechanisms():
+    assert named_params("paper_identified").mechanisms == ()
+
+
+def test_stiffness_zone_changes_slope_past_its_depth(a4):
+    base = named_params("paper_identified")
+    zoned = dataclasses.replace(base, mechanisms=(StiffnessZone(depth=jnp.asarray(0.4), k_zone=jnp.asarray(2e6)),))
+    area = float(a4.contact_area)
+    d = jnp.array([0.2, 0.35, 0.5, 0.6])
+    f0 = np.asarray(loading_force(d, 0.0, base, a4))
+    f1 = np.asarray(loading_force(d, 0.0, zoned, a4))
+    np.testing.assert_allclose(f1[:2], f0[:2], rtol=1e-6)
+    slope = (f1[3] - f1[2]) / 0.1
+    assert slope == pytest.approx(2e6 * area, rel=1e-3)
+    run0 = simulate(base, a4, PAPER_SPEED)
+    run1 = simulate(zoned, a4, PAPER_SPEED)
+    assert float(run1.crush.max()) < float(run0.crush.max()) - 0.03
+
+
+def test_progressive_and_rate_dependent_forces(a4):
+    base = named_params("paper_identified")
+    prog = dataclasses.replace(base, mechanisms=(ProgressiveStiffness(progression=jnp.asarray(0.5)),))
+    rate = dataclasses.replace(base, mechanisms=(RateDependence(rate_coefficient=jnp.asarray(0.01)),))
+    f0 = float(loading_force(0.4, 10.0, base, a4))
+    assert float(loading_force(0.4, 10.0, prog, a4)) == pytest.approx(f0 * 1.2)
+    assert float(loading_force(0.4, 10.0, rate, a4)) == pytest.approx(f0 * 1.1)
+    assert float(loading_force(0.4, -3.0, rate, a4)) == pytest.approx(f0)  # no effect while unloading
