@@ -16,7 +16,7 @@ import sys
 
 from identify.errors import UserError
 
-COMMANDS = ("simulate", "vehicles", "frames", "track")
+COMMANDS = ("fit", "track", "frames", "simulate", "sensitivity", "vehicles")
 
 EXIT_BAD_INPUT = 2
 

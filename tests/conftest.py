@@ -29,3 +29,17 @@ def default_run(a4):
     from sim import named_params, simulate
 
     return simulate(named_params("vsim_default"), a4, PAPER_SPEED)
+
+
+SAMPLE_FILM = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / "samples" / "a4_paper.mp4"
+
+
+@pytest.fixture(scope="session")
+def sample_results(tmp_path_factory):
+    """The results folder of the README's main command, ``identify fit`` on the bundled
+    sample film, run once per session (the slow end-to-end tests share it)."""
+    from identify.cli import main
+
+    out = tmp_path_factory.mktemp("sample") / "a4_paper.identify"
+    assert main(["fit", str(SAMPLE_FILM), "--vehicle", "audi_a4", "--out", str(out), "--quiet"]) == 0
+    return out

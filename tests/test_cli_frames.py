@@ -87,3 +87,30 @@ def test_refuses_a_non_empty_output_folder(tmp_path, capsys):
     assert main(["frames", str(tmp_path / "f.mp4"), "--out", str(tmp_path / "out")]) == 2
     assert "not empty" in capsys.readouterr().err
     assert (tmp_path / "out" / "keep.txt").read_text() == "mine"
+
+
+@pytest.mark.slow
+def test_scaled_frames_count_time_from_the_measured_contact(tmp_path, capsys):
+    from identify.synthetic import analytic_trajectory, render_crash
+
+    meta = render_crash("audi_a4", analytic_trajectory(speed=15.0, duration=0.03), tmp_path / "c.mp4",
+                        frames_before=12, width=640, height=320)
+    rc = main(["frames", str(tmp_path / "c.mp4"), "--out", str(tmp_path / "s"), "--scaled",
+               "--vehicle", "audi_a4", "--every", "10"])
+    assert rc == 0
+    err = capsys.readouterr().err
+    measured = int(err.split("first contact measured at frame ")[1].split()[0])
+    assert abs(measured - meta["contact_frame"]) <= 1
+    assert len(list((tmp_path / "s").glob("frame_*.png"))) == 5
+
+
+def test_colour_films_give_colour_images(tmp_path):
+    src = tmp_path / "src"
+    src.mkdir()
+    for i in range(4):
+        img = np.zeros((12, 16, 3), np.uint8)
+        img[..., 1] = 30 * i + 50  # green, changing
+        cv2.imwrite(str(src / f"img{i}.png"), img)
+    assert main(["frames", str(src), "--out", str(tmp_path / "out"), "--every", "2", "--quiet"]) == 0
+    out = cv2.imread(str(tmp_path / "out" / "frame_00002.png"), cv2.IMREAD_UNCHANGED)
+    assert out.shape == (12, 16, 3) and out[0, 0].tolist() == [0, 110, 0]

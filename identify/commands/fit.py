@@ -1,0 +1,70 @@
+"""``identify fit``: the main job, from a crash-test recording to the simulation's parameters."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+from identify.errors import UserError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "fit",
+        help="identify the collision parameters from a crash-test film (or tracks.csv)",
+        description="Track the car in a crash-test film, fit the collision model to its motion and write "
+        "result.json, tracks.csv, plots and report.md to a results folder.",
+    )
+    p.add_argument("recording", type=Path, metavar="VIDEO", help="video file, folder of numbered frames, or tracks.csv")
+    p.add_argument("--vehicle", required=True, help="vehicle name (see 'identify vehicles') or path to a .toml")
+    p.add_argument("--fps", type=float, default=None, help="true recording rate if the container's is wrong")
+    p.add_argument("--tape-segment", type=float, default=0.1, help="reference-tape segment length, m (default 0.1)")
+    p.add_argument("--speed", type=float, default=None, help="impact speed in km/h if known (else measured)")
+    p.add_argument("--out", type=Path, default=None, help="results folder (default: <video stem>.identify/ beside it)")
+    p.add_argument("--no-discover", action="store_true", help="fit the base model only")
+    p.add_argument("--starts", type=int, default=5, help="starting points of the fit (default 5)")
+    p.add_argument("--quiet", action="store_true", help="no progress messages")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.fps is not None and not (math.isfinite(args.fps) and 0 < args.fps <= 1e6):
+        raise UserError(f"--fps must be a positive frame rate, got {args.fps}")
+    if not (math.isfinite(args.tape_segment) and 0.005 <= args.tape_segment <= 1.0):
+        raise UserError(f"--tape-segment must be a length in metres (0.005-1), got {args.tape_segment}")
+    if not 1 <= args.starts <= 50:
+        raise UserError(f"--starts must be in 1..50, got {args.starts}")
+
+    import dataclasses
+
+    import identify
+    from identify.fitting import FitOptions
+
+    t0 = time.perf_counter()
+
+    def progress(msg: str) -> None:
+        if not args.quiet:
+            print(f"[{time.perf_counter() - t0:6.1f} s] {msg}", file=sys.stderr, flush=True)
+
+    ident = identify.fit(
+        args.recording,
+        args.vehicle,
+        fps=args.fps,
+        tape_segment=args.tape_segment,
+        speed_kmh=args.speed,
+        out=args.out,
+        discover=not args.no_discover,
+        options=dataclasses.replace(FitOptions(), starts=args.starts),
+        progress=progress,
+    )
+    doc = ident.document
+    print(f"{doc['vehicle_name']}, {doc['impact_speed_kmh']:.2f} km/h, fit RMS {1e3 * doc['fit']['rms_m']:.2f} mm")
+    for name, p in doc["parameters"].items():
+        std = f" +- {p['std']:.3g}" if p.get("std") is not None else ""
+        flag = "" if p.get("identified", True) else f"   ({p['reason']})"
+        print(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
+    print(f"results: {ident.out}")
+    return 0

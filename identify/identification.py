@@ -1,0 +1,250 @@
+"""``identify.fit``: from a recording to parameters, a result document and a results folder.
+
+The flow: recording (``identify.recording``) -> Measurement -> fit (``identify.fitting``)
+-> result.json, tracks.csv, plots and report.md (written atomically).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from identify.errors import UserError
+from identify.fitting import FitOptions, FitResult, fit as fit_measurement
+from identify.recording import Recording, load_recording
+
+COLLISION_PARAMETERS = ("k_compression", "k_restitution", "restitution", "dz_contact")
+
+
+@dataclasses.dataclass
+class Identification:
+    """What ``identify.fit`` returns.
+
+    document : the result.json content (dict).
+    fit : identify.fitting.FitResult (values, covariance, trajectory, predictions ...).
+    recording : identify.recording.Recording (the measurement, and a film's tracks).
+    vehicle : sim.Vehicle.
+    out : the results folder, or None when nothing was written.
+    """
+
+    document: dict
+    fit: FitResult
+    recording: Recording
+    vehicle: object
+    out: Path | None = None
+
+    @property
+    def parameters(self) -> dict:
+        """name -> {"value", "unit", "std", ...} of the collision parameters."""
+        return self.document["parameters"]
+
+
+def default_output_folder(recording_path: Path) -> Path:
+    """``<stem>.identify/`` beside the recording (a folder of frames: beside the folder)."""
+    p = Path(recording_path)
+    stem = p.name if p.is_dir() else p.stem
+    return p.parent / f"{stem}.identify"
+
+
+def car_geometry_of(vehicle):
+    """The video stage's CarGeometry of a (validated) sim.Vehicle."""
+    from video.types import CarGeometry
+
+    return CarGeometry(
+        length=float(vehicle.length),
+        height=float(vehicle.height),
+        wheelbase=float(vehicle.wheelbase),
+        front_overhang=float(vehicle.front_overhang),
+        wheel_radius=float(vehicle.wheel_radius),
+        cg_height=float(vehicle.cg_height),
+        cg_to_front_axle=float(vehicle.cg_to_front_axle),
+        silhouette_side=np.asarray(vehicle.silhouette_side, float),
+        windscreen_top=np.asarray(vehicle.windscreen_top if vehicle.windscreen_top else (np.nan, np.nan), float),
+    )
+
+
+def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=(), discovery_status="") -> dict:
+    """The result.json content (``docs/interface.md``), NaN-free after ``results.dumps``."""
+    from sim import events_ms
+
+    params = {}
+    for name in COLLISION_PARAMETERS:
+        if name not in fr.values:
+            params[name] = {"value": float(getattr(fr.params, name)), "unit": _unit(name), "std": None,
+                            "identified": False, "reason": "held fixed, not fitted"}  # fmt: skip
+            continue
+        ok, reason = fr.identified.get(name, (True, ""))
+        entry = {"value": fr.values[name], "unit": fr.units[name], "std": fr.std[name], "identified": ok}
+        if not ok:
+            entry["reason"] = reason
+        params[name] = entry
+    for mech in fr.params.mechanisms:
+        for pname, (value, unit) in mech.parameter_values().items():
+            key = f"{mech.effect}.{pname}"
+            if key in fr.values:
+                params[key] = {"value": fr.values[key], "unit": unit, "std": fr.std[key], "identified": True}
+    model_events = {k: (v + fr.contact_time * 1e3 if v is not None else None) for k, v in events_ms(fr.trajectory).items()}
+    tracks = recording.tracks
+    doc = {
+        "vehicle": vehicle.key,
+        "vehicle_name": vehicle.name,
+        "recording": str(recording.path),
+        "recording_kind": recording.kind,
+        "fps": fr.measurement.fps,
+        "impact_speed_kmh": fr.speed * 3.6,
+        "impact_speed_std_kmh": fr.std.get("impact_speed", 0.0) * 3.6,
+        "speed_mps": fr.speed,
+        "contact_time_ms": fr.contact_time * 1e3,
+        "parameters": params,
+        "nuisance": {
+            n: {"value": fr.values[n], "unit": fr.units[n], "std": fr.std[n]}
+            for n in ("impact_speed", "contact_time")
+            if n in fr.values
+        },
+        "covariance": {"names": list(fr.names), "matrix": fr.covariance},
+        "correlation": {"names": list(fr.names), "matrix": fr.correlation},
+        "fit": {
+            "rms_m": fr.rms_m,
+            "model": fr.model,
+            "rms_by_channel": fr.rms,
+            "chi2": fr.chi2,
+            "dof": fr.dof,
+            "reduced_chi2": fr.reduced_chi2,
+            "converged": fr.converged,
+            "starts": fr.starts,
+            "starts_at_best": fr.starts_at_best,
+            "other_minima_cost": fr.other_minima,
+        },
+        "discoveries": list(discoveries),
+        "discovery_status": discovery_status,
+        "events_ms": dict(fr.measurement.events_ms),
+        "model_events_ms": model_events,
+        "notes": list(fr.measurement.notes),
+    }
+    if tracks is not None:
+        doc["contact_frame"] = int(tracks.contact_frame)
+        doc["scale_m_per_px"] = float(tracks.scale_m_per_px)
+        doc["scale_std_m_per_px"] = float(tracks.scale_sigma)
+        doc["fps"] = float(tracks.fps)
+    return doc
+
+
+def _unit(name):
+    from sim.params import UNITS
+
+    return UNITS[name]
+
+
+def write_results(out: Path, ident: Identification, default_traj) -> Path:
+    """Write the results folder atomically: result.json, tracks.csv, PNGs, report.md."""
+    from identify import plots
+    from identify.report import render_report
+    from identify.results import ResultsFolder, dumps
+    from sim import named_params
+
+    fr, rec, vehicle = ident.fit, ident.recording, ident.vehicle
+    with ResultsFolder(out) as tmp:
+        (tmp / "result.json").write_text(dumps(ident.document))
+        if rec.tracks is not None:
+            from video.report import tracks_csv, write_report
+
+            (tmp / "tracks.csv").write_text(tracks_csv(rec.tracks))
+            write_report(rec.tracks, tmp, film=rec.film, car=car_geometry_of(vehicle))
+        else:
+            (tmp / "tracks.csv").write_text(_measurement_csv(fr.measurement))
+        figures = [
+            plots.plot_displacement_velocity(fr, default_traj, tmp / "displacement_velocity.png").name,
+            plots.plot_residuals(fr, tmp / "residuals.png", windows=[
+                (d["effect"], *d["window_ms"]) for d in ident.document.get("discoveries", [])
+            ]).name,  # fmt: skip
+            plots.plot_silhouettes(fr, vehicle, default_traj, tmp / "silhouettes.png").name,
+        ]
+        overlay = plots.plot_overlay(fr, vehicle, rec, tmp / "overlay.png")
+        if overlay is not None:
+            figures.append(overlay.name)
+        defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in COLLISION_PARAMETERS}
+        (tmp / "report.md").write_text(render_report(ident.document, defaults, figures))
+    return out
+
+
+def _measurement_csv(m) -> str:
+    names = list(m.channels)
+    header = ["t_ms"] + names + [f"{n}_sigma" for n in names]
+    rows = [",".join(header)]
+    for i, t in enumerate(m.t):
+        vals = [m.channels[n][i] for n in names] + [m.sigma[n][i] for n in names]
+        rows.append(f"{t * 1e3:.6f}," + ",".join("nan" if not np.isfinite(v) else f"{v:.9g}" for v in vals))
+    return "\n".join(rows) + "\n"
+
+
+def fit(
+    recording: str | Path,
+    vehicle: str | Path,
+    *,
+    fps: float | None = None,
+    tape_segment: float = 0.1,
+    speed_kmh: float | None = None,
+    out: str | Path | None = None,
+    write: bool = True,
+    discover: bool = True,
+    options: FitOptions = FitOptions(),
+    progress=None,
+) -> Identification:
+    """Identify the collision parameters from a recording (the Python twin of ``identify fit``).
+
+    Parameters
+    ----------
+    recording : a video file, a folder of frames, or a tracks.csv.
+    vehicle : a vehicle name (``audi_a4``) or a path to a vehicle TOML file.
+    fps : the true frame rate when the container's is wrong.
+    tape_segment : m, one reference-tape segment.
+    speed_kmh : impact speed if known (held fixed); else measured.
+    out : results folder (default ``<recording stem>.identify/`` beside it); ``write=False``
+        writes nothing.
+    discover : look for physics the base model left out.
+    options : identify.fitting.FitOptions.
+    progress : callable taking a one-line status string, or None.
+
+    Returns
+    -------
+    Identification (``.parameters``, ``.document``, ``.fit``, ``.out``).
+    """
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from sim import load_vehicle, named_params, simulate
+
+    say = progress or (lambda msg: None)
+    veh = load_vehicle(vehicle)
+    out_path = Path(out) if out is not None else default_output_folder(Path(recording))
+    if write:
+        from identify.results import check_output_folder
+
+        check_output_folder(out_path)
+    if speed_kmh is not None and not (0 < speed_kmh <= 360):
+        raise UserError(f"--speed must be in (0, 360] km/h, got {speed_kmh}")
+    speed_mps = speed_kmh / 3.6 if speed_kmh is not None else None
+
+    def video_progress(done, total, stage):
+        if done == total or done % 50 == 0:
+            say(f"{stage}: frame {done} of {total}")
+
+    say(f"reading {recording}")
+    rec = load_recording(recording, car_geometry_of(veh), fps=fps, tape_segment_m=tape_segment,
+                         speed_mps=speed_mps, progress=video_progress)  # fmt: skip
+    say("fitting the collision model (the first run compiles it: ~15 s)")
+    fr = fit_measurement(rec.measurement, veh, options=options, speed_mps=speed_mps, progress=say)
+    status = (
+        "discovery of missing physics is not part of this version yet"
+        if discover
+        else "discovery of missing physics was switched off (--no-discover)"
+    )
+    doc = result_document(fr, rec, veh, discoveries=[], discovery_status=status)
+    ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh)
+    if write:
+        say(f"writing {out_path}")
+        default_traj = simulate(named_params("vsim_default"), veh, fr.speed, duration=float(fr.measurement.t.max()) + 0.001)
+        ident.out = write_results(out_path, ident, default_traj)
+    return ident

@@ -1,0 +1,140 @@
+"""The measured motion that every recording produces (film or sensors) and the fit reads.
+
+A :class:`Measurement` is a set of channels sampled at times ``t`` (s, 0 = first contact),
+each with a one-sigma uncertainty per sample (NaN where a sample was not measured). Channel
+names and units:
+
+| name | unit | meaning |
+| --- | --- | --- |
+| ``x_m`` | m | CG displacement from first contact, towards the barrier |
+| ``z_m`` | m | CG displacement, up |
+| ``pitch_rad`` | rad | pitch, nose-down positive |
+| ``vx_mps`` | m/s | CG velocity towards the barrier |
+| ``crush_m`` | m | front-end crush |
+| ``front_wheel_angle_rad``, ``rear_wheel_angle_rad`` | rad | wheel spin, forward positive |
+
+Other channels may ride along (``force_N`` for a barrier's summed load cells); the fit uses
+those it knows.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+
+from identify.errors import UserError
+
+KNOWN_CHANNELS = {
+    "x_m": "m",
+    "z_m": "m",
+    "pitch_rad": "rad",
+    "vx_mps": "m/s",
+    "crush_m": "m",
+    "front_wheel_angle_rad": "rad",
+    "rear_wheel_angle_rad": "rad",
+    "force_N": "N",
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Measurement:
+    """Measured motion of the car in a frontal barrier test.
+
+    Attributes
+    ----------
+    t : (n,) s, 0 at first contact, increasing.
+    channels : name -> (n,) values in the unit of ``KNOWN_CHANNELS``.
+    sigma : name -> (n,) one-sigma uncertainty (same unit); NaN where not measured.
+    impact_speed_mps : measured impact speed, or None.
+    impact_speed_sigma : its one-sigma uncertainty (m/s), or None.
+    source : what the recording was (a file name), for reports.
+    events_ms : events seen in the recording (e.g. ``front_wheel_block``), ms after contact.
+    notes : things a person should read about the recording.
+    """
+
+    t: np.ndarray
+    channels: dict[str, np.ndarray]
+    sigma: dict[str, np.ndarray]
+    impact_speed_mps: float | None = None
+    impact_speed_sigma: float | None = None
+    source: str = ""
+    events_ms: dict[str, float] = dataclasses.field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        t = np.asarray(self.t, dtype=float)
+        if t.ndim != 1 or len(t) < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise UserError(f"{self.source or 'measurement'}: times must be a finite, increasing series")
+        if set(self.channels) != set(self.sigma):
+            raise UserError(f"{self.source or 'measurement'}: every channel needs a sigma and vice versa")
+        for name, values in self.channels.items():
+            if np.shape(values) != t.shape or np.shape(self.sigma[name]) != t.shape:
+                raise UserError(f"{self.source or 'measurement'}: channel {name!r} has a different length than t")
+            s = np.asarray(self.sigma[name], dtype=float)
+            ok = np.isfinite(s)
+            if np.any(s[ok] <= 0):
+                raise UserError(f"{self.source or 'measurement'}: channel {name!r} has a sigma <= 0")
+        if self.impact_speed_mps is not None and not (
+            math.isfinite(self.impact_speed_mps) and self.impact_speed_mps > 0
+        ):
+            raise UserError(f"{self.source or 'measurement'}: impact speed must be > 0 m/s")
+        object.__setattr__(self, "t", t)
+
+    @property
+    def fps(self) -> float:
+        """Samples per second (median of the sample intervals)."""
+        return float(1.0 / np.median(np.diff(self.t)))
+
+    def valid(self, name: str) -> np.ndarray:
+        """(n,) bool, True where channel ``name`` has a value and a finite sigma."""
+        return np.isfinite(self.channels[name]) & np.isfinite(self.sigma[name])
+
+    def window(self, t_min: float, t_max: float) -> "Measurement":
+        """The samples with t_min <= t <= t_max (s)."""
+        keep = (self.t >= t_min) & (self.t <= t_max)
+        return dataclasses.replace(
+            self,
+            t=self.t[keep],
+            channels={k: np.asarray(v)[keep] for k, v in self.channels.items()},
+            sigma={k: np.asarray(v)[keep] for k, v in self.sigma.items()},
+        )
+
+
+def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measurement:
+    """Read a ``tracks.csv`` (``docs/interface.md``: ``t_ms`` first, channel columns, and
+    ``<name>_sigma`` or ``<stem>_sigma_<unit>`` columns where the video stage wrote them).
+
+    A channel without a sigma column gets ``sigma_floor`` in its unit: say so in notes.
+    """
+    path = Path(path)
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except OSError as err:
+        raise UserError(f"cannot read {path}: {err.strerror}") from None
+    if len(rows) < 3 or not rows[0] or rows[0][0] != "t_ms":
+        raise UserError(f"{path}: not a tracks.csv (its first column must be t_ms, with at least two rows)")
+    header = rows[0]
+    try:
+        data = np.array([[float(v) if v != "" else np.nan for v in r] for r in rows[1:]], dtype=float)
+    except ValueError:
+        raise UserError(f"{path}: a value is not a number") from None
+    cols = {name: data[:, i] for i, name in enumerate(header)}
+    channels, sigma, notes = {}, {}, []
+    for name in KNOWN_CHANNELS:
+        if name not in cols:
+            continue
+        stem, _, unit = name.rpartition("_")
+        for sname in (f"{name}_sigma", f"{stem}_sigma_{unit}"):
+            if sname in cols:
+                sigma[name] = cols[sname]
+                break
+        else:
+            sigma[name] = np.full(len(data), sigma_floor)
+            notes.append(f"{name}: no sigma column, {sigma_floor:g} assumed")
+        channels[name] = cols[name]
+    return Measurement(t=cols["t_ms"] / 1000.0, channels=channels, sigma=sigma, source=str(path), notes=tuple(notes))

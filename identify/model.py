@@ -1,0 +1,174 @@
+"""What the fit moves and how the model is compared with a measurement.
+
+- :class:`FreeParameter`: one fitted quantity, a name, a unit and a transform from an
+  unconstrained number u (what the solver moves) to its physical value (positivity and
+  ranges by reparametrisation: log, logistic, tanh).
+- :func:`assemble`: physical values -> (sim.Params, impact speed, contact time), from a
+  template Params whose fixed fields and mechanisms stay as they are. Names are Params
+  fields (``k_compression``) or ``effect.field`` for a mechanism's field
+  (``stiffness_zone.depth``), plus the nuisance parameters ``impact_speed`` (m/s) and
+  ``contact_time`` (s: when the model's first contact happens on the measurement's clock).
+- :func:`predict`: a simulated trajectory seen on the measurement's clock, channel by channel.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+
+from sim import Params
+
+NUISANCE = ("impact_speed", "contact_time")
+CONTACT_TIME_RANGE = 0.010  # s: the model's contact may differ from the measured one by this much
+
+
+@dataclasses.dataclass(frozen=True)
+class FreeParameter:
+    """A fitted quantity.
+
+    value = transform(u): ``log``: scale * exp(u) (> 0); ``logit``: lower + (upper - lower) *
+    sigmoid(u); ``tanh``: centre + scale * tanh(u) (|value - centre| < scale); ``linear``:
+    centre + scale * u.
+    """
+
+    name: str
+    unit: str
+    transform: str
+    scale: float = 1.0
+    centre: float = 0.0
+    lower: float = 0.0
+    upper: float = 1.0
+
+    @property
+    def typical(self) -> float:
+        """A typical magnitude of the value (the covariance is computed in these units)."""
+        if self.transform == "logit":
+            return 0.1 * (self.upper - self.lower)
+        if self.transform == "tanh":
+            return 0.25 * self.scale
+        return self.scale
+
+    def to_physical(self, u):
+        if self.transform == "log":
+            return self.scale * jnp.exp(u)
+        if self.transform == "logit":
+            return self.lower + (self.upper - self.lower) * jax.nn.sigmoid(u)
+        if self.transform == "tanh":
+            return self.centre + self.scale * jnp.tanh(u)
+        return self.centre + self.scale * u
+
+    def to_unconstrained(self, value: float) -> float:
+        if self.transform == "log":
+            return math.log(value / self.scale)
+        if self.transform == "logit":
+            p = (value - self.lower) / (self.upper - self.lower)
+            p = min(max(p, 1e-9), 1 - 1e-9)
+            return math.log(p / (1 - p))
+        if self.transform == "tanh":
+            r = (value - self.centre) / self.scale
+            return math.atanh(min(max(r, -1 + 1e-9), 1 - 1e-9))
+        return (value - self.centre) / self.scale
+
+
+SPEED_SCALE = 10.0  # m/s; a fixed scale keeps the compiled fit the same for every recording
+
+
+def base_parameters() -> tuple[FreeParameter, ...]:
+    """The four collision parameters of the paper and the two nuisance parameters."""
+    return (
+        FreeParameter("k_compression", "N/m^3", "log", scale=1e6),
+        FreeParameter("k_restitution", "N/m^3", "log", scale=1e6),
+        FreeParameter("restitution", "1", "logit", lower=0.0, upper=1.0),
+        FreeParameter("dz_contact", "m", "tanh", scale=0.6),
+        FreeParameter("impact_speed", "m/s", "log", scale=SPEED_SCALE),
+        FreeParameter("contact_time", "s", "tanh", scale=CONTACT_TIME_RANGE),
+    )
+
+
+def assemble(template: Params, values: dict, default_speed):
+    """Physical values -> (Params, impact speed (m/s), contact time (s)).
+
+    ``values`` maps names (see module doc) to scalars; names not present keep the
+    template's value; the speed defaults to ``default_speed`` and the contact time to 0.
+    """
+    base = {k: v for k, v in values.items() if "." not in k and k not in NUISANCE}
+    params = dataclasses.replace(template, **base)
+    mech_values = {k: v for k, v in values.items() if "." in k}
+    if mech_values:
+        mechanisms = list(params.mechanisms)
+        for name, value in mech_values.items():
+            effect, field = name.split(".", 1)
+            i = next(i for i, m in enumerate(mechanisms) if m.effect == effect)
+            mechanisms[i] = dataclasses.replace(mechanisms[i], **{field: value})
+        params = dataclasses.replace(params, mechanisms=tuple(mechanisms))
+    speed = values.get("impact_speed", default_speed)
+    contact_time = values.get("contact_time", 0.0)
+    return params, speed, contact_time
+
+
+def _hermite(values, slopes, s, h):
+    """Cubic Hermite interpolation of samples ``values`` (spacing h, first at s = 0) with
+    derivatives ``slopes`` at times s (clamped to the sampled span)."""
+    n = values.shape[0]
+    pos = jnp.clip(s / h, 0.0, n - 1.000001)
+    i = jnp.floor(pos).astype(int)
+    u = pos - i
+    y0, y1 = values[i], values[i + 1]
+    m0, m1 = slopes[i] * h, slopes[i + 1] * h
+    u2, u3 = u * u, u * u * u
+    return (2 * u3 - 3 * u2 + 1) * y0 + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * y1 + (u3 - u2) * m1
+
+
+def _linear(values, s, h):
+    n = values.shape[0]
+    pos = jnp.clip(s / h, 0.0, n - 1.000001)
+    i = jnp.floor(pos).astype(int)
+    u = pos - i
+    return (1 - u) * values[i] + u * values[i + 1]
+
+
+# channel -> (trajectory value, trajectory slope or None, value before contact per unit of
+# speed * time); before first contact the car rolls at the impact speed.
+def predict(traj, channel: str, t, speed, contact_time, wheel_radius, h: float):
+    """The model's value of ``channel`` at measurement times ``t`` (s).
+
+    Model time is ``t - contact_time``; before the model's first contact the car moves at
+    ``speed`` with its wheels rolling. ``x_m`` is the displacement from where the car was at
+    the measurement's t = 0 (the tracks.csv definition); other channels are returned as they
+    are (the fit removes their constant offsets).
+    """
+    s = t - contact_time
+
+    def ext(s_):
+        before = s_ < 0
+        if channel == "x_m":
+            after = _hermite(traj.x, traj.vx, s_, h)
+            return jnp.where(before, speed * s_, after)
+        if channel == "vx_mps":
+            return jnp.where(before, speed, _linear(traj.vx, s_, h))
+        if channel == "z_m":
+            return jnp.where(before, 0.0, _hermite(traj.z, traj.vz, s_, h))
+        if channel == "pitch_rad":
+            return jnp.where(before, 0.0, _hermite(traj.pitch, traj.pitch_rate, s_, h))
+        if channel == "crush_m":
+            return jnp.where(before, 0.0, _linear(traj.crush, s_, h))
+        if channel == "force_N":
+            return jnp.where(before, 0.0, _linear(traj.force, s_, h))
+        if channel == "front_wheel_angle_rad":
+            return jnp.where(before, speed * s_ / wheel_radius, _linear(traj.front_wheel_angle, s_, h))
+        if channel == "rear_wheel_angle_rad":
+            return jnp.where(before, speed * s_ / wheel_radius, _linear(traj.rear_wheel_angle, s_, h))
+        raise ValueError(f"no model prediction for channel {channel!r}")
+
+    value = ext(s)
+    if channel == "x_m":
+        value = value - ext(-contact_time)
+    return value
+
+
+# Channels whose constant offset the fit removes (their zero is arbitrary or set by a single
+# noisy frame); x keeps its zero, which pins the contact time.
+OFFSET_FREE = ("z_m", "pitch_rad", "front_wheel_angle_rad", "rear_wheel_angle_rad")

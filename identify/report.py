@@ -1,0 +1,80 @@
+"""The short human report of a fit (``report.md``), with the paper's Table 1 side by side."""
+
+from __future__ import annotations
+
+PARAMETER_ROWS = (
+    ("k_compression", "body stiffness, compression phase", 1e-3, "kN/m^3"),
+    ("k_restitution", "body stiffness, restitution phase", 1e-3, "kN/m^3"),
+    ("restitution", "restitution coefficient", 1.0, ""),
+    ("dz_contact", "lowering of the contact-force plane dz'", 1.0, "m"),
+)
+
+
+def _fmt(value, scale, digits=3):
+    if value is None:
+        return "-"
+    v = value * scale
+    return f"{v:.{digits}g}" if abs(v) < 1e4 else f"{v:.0f}"
+
+
+def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
+    """Return report.md's text.
+
+    Parameters
+    ----------
+    doc : the result.json document.
+    defaults : V-SIM default values by parameter name (the left column of Table 1).
+    figures : file names of the PNGs in the results folder, in reading order.
+    """
+    fitinfo = doc["fit"]
+    lines = [
+        f"# Identification: {doc['vehicle_name']}",
+        "",
+        f"Recording `{doc['recording']}` ({doc['recording_kind']}), impact speed"
+        f" {doc['impact_speed_kmh']:.2f} km/h, model `{fitinfo['model']}`.",
+        f"Fit: RMS {1e3 * fitinfo['rms_m']:.2f} mm in x, reduced chi-square {fitinfo['reduced_chi2']:.2f}"
+        f" ({fitinfo['starts_at_best']} of {fitinfo['starts']} starting points reached the best fit).",
+        "",
+        "## Parameters (the paper's Table 1, side by side)",
+        "",
+        "| parameter | V-SIM default | identified | std | |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for name, label, scale, unit in PARAMETER_ROWS:
+        p = doc["parameters"].get(name)
+        if p is None:
+            continue
+        u = f" {unit}" if unit else ""
+        status = "" if p.get("identified", True) else f"**{p['reason']}**"
+        lines.append(
+            f"| {label} | {_fmt(defaults.get(name), scale)}{u} | {_fmt(p['value'], scale, 4)}{u} |"
+            f" {_fmt(p.get('std'), scale, 2)}{u} | {status} |"
+        )
+    lines += ["", "Strongest correlations between fitted parameters:", ""]
+    corr = doc.get("correlation", {})
+    names = corr.get("names", [])
+    pairs = sorted(
+        ((abs(corr["matrix"][i][j]), names[i], names[j], corr["matrix"][i][j])
+         for i in range(len(names)) for j in range(i + 1, len(names))),
+        reverse=True,
+    )[:3]  # fmt: skip
+    lines += [f"- {a} / {b}: {r:+.2f}" for _, a, b, r in pairs] or ["- (none)"]
+    lines += ["", "## Fit quality by channel", "", "| channel | RMS residual |", "| --- | --- |"]
+    lines += [f"| {k} | {v:.4g} |" for k, v in fitinfo["rms_by_channel"].items()]
+    events = doc.get("events_ms") or {}
+    model_events = doc.get("model_events_ms") or {}
+    if events or model_events:
+        lines += ["", "## Events (ms after first contact)", "", "| event | recording | fitted model |", "| --- | --- | --- |"]
+        for key in sorted(set(events) | set(model_events)):
+            rec, mod = events.get(key), model_events.get(key)
+            lines.append(f"| {key} | {_fmt(rec, 1.0, 4)} | {_fmt(mod, 1.0, 4)} |")
+    lines += ["", "## Missing physics", ""]
+    if doc.get("discoveries"):
+        for d in doc["discoveries"]:
+            lines.append(f"- **{d['effect']}** ({d['window_ms'][0]:.0f}-{d['window_ms'][1]:.0f} ms): {d['explanation']}")
+    else:
+        lines.append(f"- {doc.get('discovery_status', 'nothing discovered')}")
+    if doc.get("notes"):
+        lines += ["", "## Notes", ""] + [f"- {n}" for n in doc["notes"]]
+    lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
+    return "\n".join(lines) + "\n"

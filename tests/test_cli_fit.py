@@ -1,0 +1,84 @@
+"""``identify fit``: the results folder as docs/interface.md fixes it; bad input as one line."""
+
+import json
+
+import numpy as np
+import pytest
+
+from helpers import synthetic_measurement
+from identify.cli import main
+from sim import named_params
+
+
+def write_tracks_csv(m, path):
+    names = list(m.channels)
+    stem_unit = [n.rpartition("_") for n in names]
+    header = ["t_ms"] + names + [f"{s}_sigma_{u}" for s, _, u in stem_unit]
+    rows = [",".join(header)]
+    for i, t in enumerate(m.t):
+        rows.append(",".join([f"{t * 1e3:.3f}"] + [f"{m.channels[n][i]:.9g}" for n in names]
+                             + [f"{m.sigma[n][i]:.9g}" for n in names]))  # fmt: skip
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def fitted_folder(a4, tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("fit")
+    csv_path = write_tracks_csv(synthetic_measurement(a4, named_params("paper_identified")), tmp / "tracks.csv")
+    out = tmp / "crash.identify"
+    assert main(["fit", str(csv_path), "--vehicle", "audi_a4", "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_result_json_has_the_interface_fields(fitted_folder):
+    doc = json.loads((fitted_folder / "result.json").read_text())
+    assert doc["vehicle"] == "audi_a4" and doc["fps"] == pytest.approx(1000.0)
+    assert doc["impact_speed_kmh"] == pytest.approx(56.3, rel=0.01)
+    for name, unit in (("k_compression", "N/m^3"), ("k_restitution", "N/m^3"), ("restitution", "1"), ("dz_contact", "m")):
+        p = doc["parameters"][name]
+        assert p["unit"] == unit and p["std"] > 0 and p["identified"] is True
+    assert doc["parameters"]["k_compression"]["value"] == pytest.approx(970e3, rel=0.03)
+    assert doc["fit"]["rms_m"] == pytest.approx(0.002, rel=0.2) and doc["fit"]["model"] == "base"
+    assert isinstance(doc["discoveries"], list)
+    cov = np.array(doc["covariance"]["matrix"])
+    assert cov.shape == (len(doc["covariance"]["names"]),) * 2 and np.allclose(cov, cov.T)
+    assert set(doc["model_events_ms"]) >= {"rear_wheel_lift", "compression_end"}
+
+
+def test_results_folder_holds_tracks_plots_and_report(fitted_folder):
+    for name in ("tracks.csv", "displacement_velocity.png", "residuals.png", "silhouettes.png", "report.md"):
+        assert (fitted_folder / name).stat().st_size > 100, name
+    report = (fitted_folder / "report.md").read_text()
+    k_fit = json.loads((fitted_folder / "result.json").read_text())["parameters"]["k_compression"]["value"]
+    assert "V-SIM default" in report and "| 730 kN/m^3 |" in report and f"| {k_fit / 1e3:.4g} kN/m^3 |" in report
+    assert not list(fitted_folder.parent.glob(".crash.identify.*")), "no temporary folder left behind"
+
+
+def test_refuses_a_folder_that_is_not_a_results_folder(tmp_path, capsys):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep me")
+    (tmp_path / "t.csv").write_text("t_ms,x_m\n0,0\n1,0.01\n2,0.02\n")
+    assert main(["fit", str(tmp_path / "t.csv"), "--vehicle", "audi_a4", "--out", str(mine), "--quiet"]) == 2
+    assert "other files" in capsys.readouterr().err
+    assert (mine / "notes.txt").read_text() == "keep me"
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["fit", "{tmp}/none.mp4", "--vehicle", "audi_a4"], "does not exist"),
+        (["fit", "{tmp}/notes.txt", "--vehicle", "audi_a4"], "not a recording"),
+        (["fit", "{tmp}/bad.mp4", "--vehicle", "audi_a4"], "cannot open video"),
+        (["fit", "{tmp}/notes.txt", "--vehicle", "audi_a9"], "unknown vehicle 'audi_a9'"),
+        (["fit", "{tmp}/notes.txt", "--vehicle", "audi_a4", "--fps", "-3"], "--fps"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(argv, message, tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("not a film")
+    (tmp_path / "bad.mp4").write_bytes(b"\x00\x01 this is not an mp4 file" * 100)
+    code = main([a.replace("{tmp}", str(tmp_path)) for a in argv] + ["--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and message in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()

@@ -1,0 +1,228 @@
+"""NHTSA EV5 reader and the acceleration-to-motion stage, on the real test 10146
+(``data/nhtsa-10146/``: a trimmed copy, see its README)."""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from identify.errors import UserError
+from identify.recordings import crash_facts, measurement_from_test, read_nhtsa
+from identify.recordings.motion import combine, find_onset
+from identify.recordings.nhtsa import (barrier_force_channels, load_ev5_channel, read_ev5_header,
+                                       vehicle_motion_channels)
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
+HEADER = DATA / "v10146.EV5"
+
+
+@pytest.fixture(scope="module")
+def test10146():
+    return read_nhtsa(HEADER)
+
+
+@pytest.fixture(scope="module")
+def motion(test10146):
+    return measurement_from_test(test10146)
+
+
+def _copy(tmp_path, curves=(93, 94, 99, 100, 900), edit=None):
+    """A copy of the trimmed test in tmp_path, header rows edited by ``edit(fields)``."""
+    lines = HEADER.read_text(encoding="latin-1").splitlines()
+    out = []
+    for line in lines:
+        f = line.split("|")
+        if edit is not None and len(f) == 20:
+            f = edit(f)
+            if f is None:
+                continue
+        out.append("|".join(f))
+    (tmp_path / "v10146.EV5").write_text("\n".join(out) + "\n", encoding="latin-1")
+    for c in curves:
+        shutil.copy(DATA / f"v10146.{c:03d}", tmp_path / f"v10146.{c:03d}")
+    return tmp_path / "v10146.EV5"
+
+
+def test_header_fields():
+    h = read_ev5_header(HEADER)
+    assert h.title.startswith("NCAP - 2018 TOYOTA CAMRY")
+    assert h.speed_kmh == pytest.approx(57.09)
+    assert h.mass_kg == pytest.approx(1719.0)
+    by_curve = {c.curve: c for c in h.channels}
+    assert sorted(by_curve) == [93, 94, 96, 99, 100, 900]
+    assert by_curve[93].attachment == "FLLR" and by_curve[93].units == "G'S"
+    assert by_curve[93].dt == pytest.approx(1e-4) and by_curve[93].n_samples == 3500
+    assert not by_curve[96].valid and by_curve[96].n_samples == 1170
+    assert not by_curve[99].primary and by_curve[93].primary
+
+
+def test_short_invalid_channel_reads_to_its_last_sample():
+    h = read_ev5_header(HEADER)
+    t, y = load_ev5_channel(h, next(c for c in h.channels if c.curve == 96))
+    assert len(t) == 1170 and t[-1] == pytest.approx(0.0669)
+
+
+def test_channel_selection(test10146):
+    assert [c.code for c in test10146.vehicle] == ["93", "94", "99", "100"]
+    assert [c.redundant for c in test10146.vehicle] == [False, False, True, True]
+    assert [c.code for c in test10146.barrier] == ["900"]
+    assert test10146.impact_speed_mps == pytest.approx(57.09 / 3.6)
+    # G'S -> m/s^2 keeps the sign: the crash pulse of a forward-positive sensor is negative
+    ch = test10146.vehicle[0]
+    pulse = (ch.t >= 0) & (ch.t <= 0.12)
+    assert -20.0 < np.trapezoid(ch.values[pulse], ch.t[pulse]) < -16.0  # m/s: the change of velocity
+    # barrier compression is negative Fx in the export and positive here
+    assert test10146.barrier[0].values.max() > 6e5
+
+
+def test_crush_and_timing_of_10146(motion):
+    facts = crash_facts(motion)
+    assert facts["max_crush_m"] == pytest.approx(0.75, abs=0.02)
+    assert facts["max_crush_ms"] == pytest.approx(74.0, abs=2.0)
+    assert motion.events_ms["compression_end"] == pytest.approx(facts["max_crush_ms"], abs=0.5)
+
+
+def test_rebound_of_10146(motion):
+    facts = crash_facts(motion)
+    assert 2.3 <= facts["rebound_mps"] <= 2.6
+    assert 100.0 <= facts["separation_ms"] <= 125.0
+
+
+def test_measurement_shape_and_sigma(motion, test10146):
+    assert motion.t[0] == 0.0 and motion.fps == pytest.approx(1000.0)
+    assert motion.t[-1] == pytest.approx(0.2999, abs=2e-3)
+    assert set(motion.channels) == {"x_m", "vx_mps"}
+    assert motion.channels["vx_mps"][0] == pytest.approx(test10146.impact_speed_mps)
+    assert motion.channels["x_m"][0] == 0.0
+    sx, sv = motion.sigma["x_m"], motion.sigma["vx_mps"]
+    assert np.all(sx > 0) and np.all(sv > 0)
+    # integration drift: the uncertainty grows with time since contact
+    assert sx[250] > sx[100] > sx[20] and sv[100] > sv[10]
+    # ... but stays small against the crush it measures
+    assert sx[74] < 0.02
+    assert motion.impact_speed_sigma > 0
+
+
+def test_contact_time_from_barrier_force_matches_nhtsa_time_zero(motion):
+    # NHTSA's time zero is the contact switch; the summed force starts within a ms of it
+    note = next(n for n in motion.notes if n.startswith("first contact"))
+    ms = float(note.split(" at ")[1].split(" ms")[0])
+    assert abs(ms) < 1.0
+
+
+def test_contact_from_vehicle_pulse_alone_lags_the_bumper(tmp_path):
+    t = read_nhtsa(HEADER, barrier=False)
+    assert t.barrier == ()
+    m = measurement_from_test(t)
+    note = next(n for n in m.notes if n.startswith("first contact"))
+    ms = float(note.split(" at ")[1].split(" ms")[0])
+    assert 1.0 < ms < 6.0 and "vehicle deceleration" in note
+    # the later zero loses the bumper's first centimetres of crush
+    assert crash_facts(m)["max_crush_m"] < 0.75
+
+
+def test_find_onset_of_a_ramp():
+    t = np.arange(-0.05, 0.1, 1e-4)
+    rng = np.random.default_rng(0)
+    pulse = np.where(t > 0.01, (t - 0.01) * 1000.0, 0.0) + 0.01 * rng.standard_normal(len(t))
+    assert find_onset(t, pulse) == pytest.approx(0.01, abs=5e-4)
+
+
+def test_invalid_vehicle_channel_is_skipped(tmp_path):
+    def mark(f):
+        if f[1] == "93":
+            f[17] = "CF"
+        return f
+
+    t = read_nhtsa(_copy(tmp_path, curves=(94, 99, 100, 900), edit=mark))
+    assert [c.code for c in t.vehicle] == ["94", "99", "100"]
+    assert any("curve 93" in n and "'CF'" in n for n in t.notes)
+
+
+def test_redundant_average_removes_offsets(test10146):
+    t, a = combine(test10146.vehicle, "mean", "vehicle accelerations")
+    pre = t <= -0.005
+    assert abs(a[pre].mean()) < 1e-12
+    manual = np.mean([c.values - c.values[pre].mean() for c in test10146.vehicle], axis=0)
+    np.testing.assert_allclose(a, manual)
+
+
+def test_raw_load_cells_are_summed_and_invalid_ones_skipped(tmp_path):
+    cells = read_ev5_header(DATA / "cells" / "v10146.EV5")
+    chosen, notes = barrier_force_channels(cells)
+    assert [c.curve for c in chosen] == [131, 260, 263, 275, 287]
+    assert any("curve 347" in n for n in notes) and any("curve 500" in n for n in notes)
+    # a test made of the vehicle rows and the five raw cells
+    lines = (DATA / "cells" / "v10146.EV5").read_text(encoding="latin-1").splitlines()
+    rows = lines[lines.index("----- INSTRUMENTATION -----") + 1:lines.index("----- END -----")]
+    keep = [line for line in HEADER.read_text(encoding="latin-1").splitlines() if not line.startswith("0|900|")]
+    end = keep.index("----- END -----")
+    (tmp_path / "v10146.EV5").write_text("\n".join(keep[:end] + rows + keep[end:]) + "\n", encoding="latin-1")
+    for c in (93, 94, 99, 100):
+        shutil.copy(DATA / f"v10146.{c:03d}", tmp_path)
+    for c in (131, 260, 263, 275, 287):
+        shutil.copy(DATA / "cells" / f"v10146.{c:03d}", tmp_path)
+    t = read_nhtsa(tmp_path / "v10146.EV5")
+    assert len(t.barrier) == 5
+    raw = sum(np.loadtxt(DATA / "cells" / f"v10146.{c:03d}")[:, 1] for c in (131, 260, 263, 275, 287))
+    tt, total = combine(t.barrier, "sum", "barrier forces")
+    pre = tt <= -0.005
+    np.testing.assert_allclose(total, -(raw - raw[pre].mean()), atol=1e-6)
+
+
+def test_missing_channel_file(tmp_path):
+    with pytest.raises(UserError, match=r"missing channel file v10146\.094 for curve 94"):
+        read_nhtsa(_copy(tmp_path, curves=(93, 99, 100, 900)))
+
+
+def test_header_without_vehicle_channels():
+    with pytest.raises(UserError, match="no valid vehicle X accelerometer"):
+        read_nhtsa(DATA / "cells" / "v10146.EV5")
+
+
+def test_file_rate_disagrees_with_header(tmp_path):
+    path = _copy(tmp_path)
+    data = np.loadtxt(DATA / "v10146.094")
+    data[:, 0] = data[0, 0] + 2e-4 * np.arange(len(data))
+    np.savetxt(tmp_path / "v10146.094", data, fmt="%.6f", delimiter="\t")
+    with pytest.raises(UserError, match="mismatched sample rates"):
+        read_nhtsa(path)
+
+
+def test_channels_at_different_rates_cannot_be_averaged(tmp_path):
+    def halve(f):
+        if f[1] == "94":
+            f[14], f[15], f[16] = "-250", "1499", "200"
+        return f
+
+    path = _copy(tmp_path, edit=halve)
+    data = np.loadtxt(DATA / "v10146.094")[::2]
+    np.savetxt(tmp_path / "v10146.094", data, fmt="%.6f", delimiter="\t")
+    t = read_nhtsa(path)  # each file agrees with its own header row
+    with pytest.raises(UserError, match="mismatched sample rates.*channel 94"):
+        measurement_from_test(t)
+
+
+def test_not_an_ev5_header(tmp_path):
+    p = tmp_path / "x.EV5"
+    p.write_text("hello|world\n")
+    with pytest.raises(UserError, match="not an EV5 header"):
+        read_nhtsa(p)
+
+
+def test_vehicle_selection_prefers_cg(tmp_path):
+    def add_cg(f):
+        if f[1] == "93":
+            f[4] = "VECG"
+        return f
+
+    h = read_ev5_header(_copy(tmp_path, edit=add_cg))
+    chosen, _ = vehicle_motion_channels(h)
+    assert [c.curve for c in chosen] == [93]
+
+
+def test_progress_is_reported_per_channel_file():
+    calls = []
+    read_nhtsa(HEADER, progress=lambda done, total, stage: calls.append((done, total)))
+    assert calls == [(k, 5) for k in range(1, 6)]

@@ -1,0 +1,168 @@
+"""Quadrant-target detection and sub-pixel centres on small synthetic images.
+
+Targets are drawn anti-aliased by supersampling (8x8 samples per pixel) at known
+sub-pixel centres, radii and rotations.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from video.errors import VideoError
+from video.targets import (
+    TargetConfig,
+    centre_sigma,
+    detect_targets,
+    orientation,
+    refine_gradient,
+    to_gray,
+)
+
+
+def draw_targets(shape, centres, radii, angles, ss=8, bg=0.5, dark=0.05, light=0.95,
+                 image=None):
+    """Draw quadrant targets, anti-aliased by ``ss`` x ``ss`` supersampling.
+
+    ``angles[k]`` is the image angle (clockwise on the screen) of the boundary where a
+    light quadrant begins. Returns an (H, W) float32 image in [0, 1].
+    """
+    H, W = shape
+    big = (np.full((H * ss, W * ss), bg, np.float32) if image is None
+           else cv2.resize(image.astype(np.float32), (W * ss, H * ss),
+                           interpolation=cv2.INTER_NEAREST))
+    for (cu, cv_), r, a in zip(centres, radii, angles):
+        # only the target's bounding box, in supersampled pixels
+        x0, x1 = max(int((cu - r - 2) * ss), 0), min(int((cu + r + 3) * ss), W * ss)
+        y0, y1 = max(int((cv_ - r - 2) * ss), 0), min(int((cv_ + r + 3) * ss), H * ss)
+        ys, xs = np.mgrid[y0:y1, x0:x1]
+        du = (xs + 0.5) / ss - 0.5 - cu
+        dv = (ys + 0.5) / ss - 0.5 - cv_
+        inside = du * du + dv * dv <= r * r
+        q = np.floor((np.arctan2(dv, du) - a) / (np.pi / 2)).astype(int) % 2
+        box = big[y0:y1, x0:x1]
+        box[inside] = np.where(q[inside] == 0, light, dark)
+    return big.reshape(H, ss, W, ss).mean(axis=(1, 3))
+
+
+def _grid_scene(seed, shape=(250, 320)):
+    rng = np.random.default_rng(seed)
+    gu, gv = np.meshgrid(np.arange(50, shape[1] - 20, 60), np.arange(50, shape[0] - 20, 60))
+    centres = np.column_stack([gu.ravel(), gv.ravel()]).astype(float)
+    centres += rng.uniform(-0.5, 0.5, centres.shape)
+    radii = rng.uniform(5.0, 20.0, len(centres))
+    angles = rng.uniform(0.0, np.pi, len(centres))
+    return centres, radii, angles, rng
+
+
+def _match(found, truth):
+    dist, idx = cKDTree(truth).query(found)
+    return dist, idx
+
+
+def test_clean_centres_within_0p1_px_rms():
+    centres, radii, angles, _ = _grid_scene(1)
+    img = draw_targets((250, 320), centres, radii, angles)
+    det = detect_targets(img)
+    assert len(det) == len(centres)
+    dist, idx = _match(det.centres, centres)
+    assert len(set(idx)) == len(centres)
+    assert np.sqrt(np.mean(dist**2)) < 0.1
+    np.testing.assert_allclose(det.radii, radii[idx], atol=0.3)
+    err = (det.orientations - angles[idx] + np.pi / 2) % np.pi - np.pi / 2
+    assert np.abs(err).max() < 0.02
+
+
+def test_noisy_blurred_centres_within_0p3_px_rms():
+    centres, radii, angles, rng = _grid_scene(2)
+    img = draw_targets((250, 320), centres, radii, angles)
+    img = cv2.filter2D(img, -1, np.full((1, 5), 0.2, np.float32))  # 5 px motion blur
+    img = cv2.GaussianBlur(img, (0, 0), 0.8)  # defocus
+    img = 0.8 * img + rng.normal(0.0, 0.03, img.shape).astype(np.float32)  # dim + noise
+    det = detect_targets(img)
+    assert len(det) == len(centres)
+    dist, _ = _match(det.centres, centres)
+    assert np.sqrt(np.mean(dist**2)) < 0.3
+
+
+def test_colour_uint8_black_yellow_target():
+    img = draw_targets((80, 90), [(40.3, 37.8)], [12.0], [0.3], dark=0.0, light=1.0, bg=0.3)
+    rgb = np.zeros((80, 90, 3), np.uint8)
+    rgb[..., 0] = np.round(img * 255)           # red
+    rgb[..., 1] = np.round(img * 255)           # green: light quadrants are yellow
+    rgb[..., 2] = np.round(np.full_like(img, 0.3) * 255 * (img < 0.2))
+    det = detect_targets(rgb)
+    assert len(det) == 1
+    assert np.hypot(*(det.centres[0] - [40.3, 37.8])) < 0.1
+
+
+def test_no_false_targets_on_tape_edges_blobs_and_noise():
+    rng = np.random.default_rng(3)
+    img = np.full((160, 240), 0.5, np.float32)
+    # single-row checker tape (T-junctions on its edges)
+    for k in range(10):
+        img[20:32, 10 + 20 * k: 30 + 20 * k] = 0.05 if k % 2 else 0.95
+    # a dark disc, a light disc, a half-dark disc (straight edge through the centre)
+    yy, xx = np.mgrid[0:160, 0:240]
+    img[(xx - 40) ** 2 + (yy - 80) ** 2 < 144] = 0.05
+    img[(xx - 90) ** 2 + (yy - 80) ** 2 < 144] = 0.95
+    img[((xx - 140) ** 2 + (yy - 80) ** 2 < 144) & (xx < 140)] = 0.05
+    # a corner of a rectangle (L-junction)
+    img[110:150, 170:230] = 0.1
+    img += rng.normal(0.0, 0.02, img.shape).astype(np.float32)
+    det = detect_targets(img)
+    assert len(det) == 0, det.centres
+
+
+def test_orientation_follows_clockwise_rotation():
+    c = np.array([30.2, 29.7])
+    base = draw_targets((60, 60), [c], [14.0], [0.1])
+    turned = draw_targets((60, 60), [c], [14.0], [0.1 + 0.25])
+    a0 = orientation(to_gray(base), c, 14.0)
+    a1 = orientation(to_gray(turned), c, 14.0)
+    assert a0 == pytest.approx(0.1, abs=0.01)
+    assert a1 - a0 == pytest.approx(0.25, abs=0.01)
+
+
+def test_refine_converges_from_a_pixel_off():
+    c = np.array([33.37, 28.81])
+    img = to_gray(draw_targets((60, 64), [c], [10.0], [0.7]))
+    got = refine_gradient(img, c + [1.6, -1.4], 10.0)
+    assert np.hypot(*(got - c)) < 0.05
+
+
+@pytest.mark.parametrize("radius", [6.0, 12.0, 20.0])
+def test_centre_sigma_matches_the_scatter_under_noise(radius):
+    rng = np.random.default_rng(int(radius))
+    c = np.array([40.3, 39.6])
+    base = draw_targets((80, 80), [c], [radius], [0.4])
+    noise = 0.03
+    got, pred = [], []
+    for _ in range(120):
+        img = (base + rng.normal(0.0, noise, base.shape)).astype(np.float32)
+        p = refine_gradient(img, c + rng.uniform(-1, 1, 2), radius)
+        got.append(p)
+        pred.append(centre_sigma(img, p, radius, noise, floor_px=0.0))
+    scatter = np.std(np.array(got), axis=0).mean()
+    assert np.mean(pred) == pytest.approx(scatter, rel=0.3)
+
+
+def test_roi_limits_the_search_and_keeps_frame_coordinates():
+    centres = np.array([[30.4, 30.6], [120.2, 50.1]])
+    img = draw_targets((90, 160), centres, [10, 10], [0.2, 0.9])
+    det = detect_targets(img, roi=(90, 10, 160, 90))
+    assert len(det) == 1
+    assert np.hypot(*(det.centres[0] - centres[1])) < 0.1
+
+
+def test_radius_range_is_respected():
+    img = draw_targets((80, 80), [(40.0, 40.0)], [25.0], [0.0])
+    assert len(detect_targets(img, TargetConfig(max_radius_px=20.0))) == 0
+    assert len(detect_targets(img, TargetConfig(max_radius_px=30.0))) == 1
+
+
+def test_bad_frame_shape_raises_video_error():
+    with pytest.raises(VideoError):
+        to_gray(np.zeros((2, 3, 4, 5)))

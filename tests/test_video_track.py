@@ -1,0 +1,394 @@
+"""Tracking and motion on rendered crash films with known truth (video.render), and the
+motion functions on small synthetic series.
+
+The films are rendered in memory at 4 mm/px (1280 px wide, the whole Golf in view):
+a car that approaches at 15.6 m/s, decelerates on a linear spring (x = v/w sin(w t)),
+pitches nose-down, blocks its front wheels at 47 ms and lifts its rear wheel at 69 ms.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from identify.synthetic import car_geometry
+from video.errors import VideoError
+from video.io import frame_noise_sigma
+from video.motion import (
+    block_time,
+    classify_targets,
+    contact_time,
+    impact_speed,
+    lift_time,
+    rigid_fit,
+)
+from video.render import Renderer
+from video.scene import Effects, Motion, Occluder, Scene, default_camera, default_tapes, \
+    default_targets
+from video.targets import detect_targets
+from video.track import track_film, track_targets
+
+ROOT = Path(__file__).resolve().parents[1]
+V = 15.6  # m/s
+T_BLOCK = 0.047
+T_LIFT = 0.069
+
+
+def golf():
+    with open(ROOT / "data" / "vehicles" / "vw_golf_7.toml", "rb") as fh:
+        return car_geometry(tomllib.load(fh))
+
+
+def crash_motion(car, n_pre=30, n_post=90, frac=0.0, omega=24.0, lift_acc=60.0, fps=1000.0):
+    """A crash with known contact (t = 0), wheel block and rear lift; ``frac`` moves the
+    frames by a fraction of a frame against the contact instant."""
+    t = (np.arange(n_pre + n_post) - n_pre + frac) / fps
+    tp = np.maximum(t, 0.0)
+    x = np.where(t < 0, V * t, V / omega * np.sin(np.minimum(omega * tp, np.pi / 2)))
+    bump = (1 - np.cos(np.minimum(omega * tp, np.pi))) / 2
+    pitch = 0.06 * bump
+    z = -0.01 * bump
+    r = car.wheel_radius
+    roll = (x - x[0]) / r
+    front = np.where(t < T_BLOCK, roll, np.interp(T_BLOCK, t, roll))
+
+    def axle_z(px):
+        return car.cg_height + z - (px - car.x_cg) * np.sin(pitch) \
+            + (r - car.cg_height) * np.cos(pitch)
+
+    lift = np.where(t > T_LIFT, 0.5 * lift_acc * (t - T_LIFT) ** 2, 0.0)
+    return Motion(t=t, x=x, z=z, pitch=pitch, front_wheel_angle=front, rear_wheel_angle=roll,
+                  front_wheel_dz=r - axle_z(car.front_axle_x),
+                  rear_wheel_dz=r + lift - axle_z(car.rear_axle_x))
+
+
+class ArrayFilm:
+    """The part of video.io.Film that track_film uses, over frames held in memory."""
+
+    def __init__(self, frames, fps=1000.0):
+        self.frames = frames
+        self.fps = fps
+        self.n_frames = len(frames)
+        self.noise = np.array([frame_noise_sigma(f) for f in frames])
+        self.notes = []
+        self.path = "<rendered film>"
+
+    def __getitem__(self, i):
+        return self.frames[i]
+
+    def __len__(self):
+        return self.n_frames
+
+    def __iter__(self):
+        return iter(self.frames)
+
+
+def render(car, motion, direction=1, effects=Effects(), occluders=(), height=440):
+    cam = default_camera(car, 2.0, width=1280, height=height, m_per_px=0.004)
+    scene = Scene(car=car, camera=cam, targets=default_targets(car), tapes=default_tapes(car),
+                  x_barrier=2.0, direction=direction, effects=effects, occluders=occluders)
+    r = Renderer(scene, motion)
+    frames, rows = [], []
+    for i in range(motion.n):
+        frames.append(r.render(i))
+        rows.append(r.truth_row(i))
+    truth = {k: np.array([row[k] for row in rows]) for k in rows[0]}
+    return ArrayFilm(frames), truth, r.truth_meta()
+
+
+def match_targets(tracks, truth, meta):
+    """Map target<k> to the truth's target names by their first-frame positions."""
+    names = [t["name"] for t in meta["targets"]]
+    out = {}
+    k = 0
+    while f"target{k}_u_px" in tracks.channels:
+        u0 = tracks.channels[f"target{k}_u_px"][0]
+        v0 = tracks.channels[f"target{k}_v_px"][0]
+        d = [np.hypot(u0 - truth[f"{n}_u_px"][0], v0 - truth[f"{n}_v_px"][0]) for n in names]
+        out[k] = names[int(np.argmin(d))]
+        k += 1
+    return out
+
+
+def check_film(tracks, truth, meta, centre_rms_px):
+    cf = meta["contact_frame"]
+    # contact frame and clock
+    assert abs(tracks.contact_frame - cf) <= 1
+    assert tracks.t[tracks.contact_frame] == 0.0
+    t0_ms = truth["t_s"][tracks.contact_frame] * 1e3  # truth clock at our t = 0
+    # target centres against the rendered truth
+    kinds = {t["name"]: t["kind"] for t in meta["targets"]}
+    match = match_targets(tracks, truth, meta)
+    assert sorted(match.values()) == sorted(kinds)
+    errs = []
+    for k, name in match.items():
+        e = np.hypot(tracks.channels[f"target{k}_u_px"] - truth[f"{name}_u_px"],
+                     tracks.channels[f"target{k}_v_px"] - truth[f"{name}_v_px"])
+        errs.append(e[np.isfinite(e)])
+    assert np.sqrt(np.mean(np.concatenate(errs) ** 2)) < centre_rms_px
+    # targets told apart: body / hubs
+    roles = [n for n in tracks.notes if n.startswith("targets: ")][0]
+    for k, name in match.items():
+        assert f"target{k}={kinds[name]}" in roles
+    # motion on our clock: displacement from the contact frame
+    x_true = truth["x_m"] - truth["x_m"][tracks.contact_frame]
+    x = tracks.channels["x_m"]
+    assert np.sqrt(np.nanmean((x - x_true) ** 2)) < 0.002
+    assert np.all(np.isfinite(x)) and np.all(tracks.sigma["x_m"] > 0)
+    # sigma per sample: neither hiding the error nor swamping it
+    ratio = np.abs(x - x_true) / tracks.sigma["x_m"]
+    assert np.percentile(ratio, 95) < 3.0
+    assert np.median(tracks.sigma["x_m"]) < 0.001
+    z_true = truth["z_m"] - truth["z_m"][tracks.contact_frame]
+    assert np.sqrt(np.nanmean((tracks.channels["z_m"] - z_true) ** 2)) < 0.002
+    pitch_err = np.degrees(tracks.channels["pitch_rad"] - truth["pitch_rad"])
+    assert np.sqrt(np.nanmean(pitch_err**2)) < 0.2
+    assert tracks.impact_speed_mps == pytest.approx(V, rel=0.005)
+    vx = tracks.channels["vx_mps"][: tracks.contact_frame - 8]
+    np.testing.assert_allclose(vx, V, rtol=0.005)
+    assert any("CFC 60" in n for n in tracks.notes)
+    assert tracks.scale_m_per_px == pytest.approx(0.004, rel=0.002)
+    crush_err = tracks.channels["crush_m"] - truth["crush_m"]
+    assert np.sqrt(np.nanmean(crush_err**2)) < 0.005
+    # wheels
+    spin = tracks.channels["front_wheel_angle_rad"]
+    spin_true = truth["front_wheel_angle_rad"] - truth["front_wheel_angle_rad"][0]
+    assert np.sqrt(np.nanmean((spin - spin_true) ** 2)) < 0.02
+    assert tracks.events_ms["front_wheel_block"] == pytest.approx(T_BLOCK * 1e3 - t0_ms, abs=2.0)
+    assert tracks.events_ms["rear_wheel_lift"] == pytest.approx(T_LIFT * 1e3 - t0_ms, abs=2.0)
+    assert "front_wheel_lift" not in tracks.events_ms
+    assert "rear_wheel_block" not in tracks.events_ms
+    # the sub-frame contact instant
+    assert -t0_ms * 1e-3 == pytest.approx(tracks.contact_offset_s, abs=0.0006)
+
+
+@pytest.fixture(scope="module")
+def clean_film():
+    car = golf()
+    film, truth, meta = render(car, crash_motion(car, n_post=95))
+    return car, film, truth, meta
+
+
+def test_clean_film_left_to_right(clean_film):
+    car, film, truth, meta = clean_film
+    tracks = track_film(film, car)
+    assert tracks.direction == 1
+    check_film(tracks, truth, meta, centre_rms_px=0.1)
+
+
+@pytest.mark.slow
+def test_noisy_blurred_flickering_film_right_to_left_between_frames():
+    car = golf()
+    effects = Effects(noise_sigma=3.0, blur_substeps=3, exposure=0.5, flicker=0.05, seed=4)
+    film, truth, meta = render(car, crash_motion(car, n_post=85, frac=0.4, lift_acc=80.0),
+                               direction=-1, effects=effects)
+    tracks = track_film(film, car)
+    assert tracks.direction == -1
+    check_film(tracks, truth, meta, centre_rms_px=0.3)
+
+
+def test_occluded_target_is_reported_lost_not_invented():
+    car = golf()
+    motion = crash_motion(car, n_pre=36, n_post=0)
+    occ = (Occluder("door", start=8, stop=24, radius=0.06),)
+    film, truth, _ = render(car, motion, occluders=occ)
+    first = detect_targets(film[0])
+    tt = track_targets(iter(film), film.n_frames, first, film.noise / 255.0)
+    k = int(np.argmin(np.hypot(*(first.centres - [truth["door_u_px"][0],
+                                                  truth["door_v_px"][0]]).T)))
+    lost = ~np.isfinite(tt.uv[:, k, 0])
+    covered = truth["door_occluded"].astype(bool)
+    assert lost.any()
+    assert not lost[~covered].any()          # only lost while something covers it
+    assert not lost[-5:].any()               # and found again afterwards
+    assert any(kk == k for kk, _, _ in tt.lost)
+    seen = ~lost
+    e = np.hypot(tt.uv[seen, k, 0] - truth["door_u_px"][seen],
+                 tt.uv[seen, k, 1] - truth["door_v_px"][seen])
+    assert e.max() < 0.3                     # what is reported is right
+    others = [j for j in range(len(first)) if j != k]
+    assert np.all(np.isfinite(tt.uv[:, others, 0]))
+
+
+def test_film_without_targets_raises():
+    car = golf()
+    motion = crash_motion(car, n_pre=12, n_post=0)
+    cam = default_camera(car, 2.0, width=1280, height=440, m_per_px=0.004)
+    scene = Scene(car=car, camera=cam, targets=(), tapes=default_tapes(car), x_barrier=2.0)
+    r = Renderer(scene, motion)
+    film = ArrayFilm([r.render(i) for i in range(motion.n)])
+    with pytest.raises(VideoError, match="quadrant target"):
+        track_film(film, car)
+
+
+# ------------------------------------------------------------------ motion functions
+
+
+def test_rigid_fit_recovers_rotation_and_translation():
+    rng = np.random.default_rng(0)
+    ref = rng.uniform(0, 500, (5, 2))
+    phi = 0.031
+    R = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
+    cur = (ref - ref.mean(0)) @ R.T + ref.mean(0) + [12.5, -3.25]
+    got, rc, cc, res = rigid_fit(ref, cur)
+    assert got == pytest.approx(phi, abs=1e-12)
+    np.testing.assert_allclose(cc - rc, [12.5, -3.25], atol=1e-9)
+    assert np.abs(res).max() < 1e-9
+
+
+def test_classify_separates_fixed_hub_body_and_loose_targets():
+    n = 60
+    t = np.arange(n)
+    body = np.array([[100.0, 50.0], [300.0, 80.0], [200.0, 150.0]])
+    uv = np.zeros((n, 6, 2))
+    ang = np.zeros((n, 6))
+    phi = 0.002 * np.maximum(t - 30, 0)
+    for i in range(n):
+        R = np.array([[np.cos(phi[i]), -np.sin(phi[i])], [np.sin(phi[i]), np.cos(phi[i])]])
+        shift = np.array([-4.0 * t[i], 0.0])              # moving to the image's left
+        uv[i, :3] = (body - 200) @ R.T + 200 + shift
+        ang[i, :3] = phi[i]
+        uv[i, 3] = [350.0 - 4.0 * t[i], 180.0]            # hub: spins
+        ang[i, 3] = -0.05 * t[i]
+        uv[i, 4] = [600.0, 40.0]                          # fixed
+        uv[i, 5] = [150.0 - 4.0 * t[i] + 0.3 * max(t[i] - 30, 0) ** 1.5, 120.0]  # crushing
+    roles = classify_targets(uv, ang)
+    assert roles.direction == -1
+    assert roles.kind == ("body", "body", "body", "front_hub", "fixed", "other")
+
+
+def test_contact_time_and_speed_from_noisy_displacement():
+    fps = 1000.0
+    rng = np.random.default_rng(1)
+    tc = 0.0404  # s, between frames
+    t = np.arange(140) / fps
+    w = 24.0
+    tau = np.maximum(t - tc, 0.0)
+    x = 12.0 * (t - tc) - np.where(tau > 0, 12.0 * tau - 12.0 / w * np.sin(w * tau), 0.0)
+    sig = np.full_like(t, 3e-4)
+    got, _ = contact_time(t, x + rng.normal(0, 3e-4, len(t)), sig, fps)
+    assert got == pytest.approx(tc, abs=1.0 / fps)
+    v, vs = impact_speed(t, x, sig, int(np.ceil(tc * fps)))
+    assert v == pytest.approx(12.0, rel=0.005) and vs > 0
+
+
+def test_block_and_lift_times_between_frames():
+    fps = 1000.0
+    t = np.arange(-0.02, 0.12, 1 / fps)
+    x = np.where(t < 0, 15 * t, 15 / 24 * np.sin(24 * np.clip(t, 0, np.pi / 48)))
+    rolling = x / 0.3
+    tb = 0.0473
+    spin = np.where(t < tb, rolling, np.interp(tb, t, rolling))
+    rng = np.random.default_rng(2)
+    s = np.full_like(t, 0.003)
+    got = block_time(t, spin + rng.normal(0, 0.003, len(t)), s, rolling, 0.0, fps)
+    assert got == pytest.approx(tb, abs=0.002)
+    tl = 0.0687
+    h = np.where(t > tl, 30.0 * (t - tl) ** 2, 0.0) + rng.normal(0, 2e-4, len(t))
+    got = lift_time(t, h, np.full_like(t, 2e-4), 0.0, fps)
+    assert got == pytest.approx(tl, abs=0.002)
+    assert block_time(t, rolling, s, rolling, 0.0, fps) is None  # a rolling wheel
+    assert lift_time(t, np.zeros_like(t), np.full_like(t, 2e-4), 0.0, fps) is None
+
+
+@pytest.mark.slow
+def test_film_of_a_simulated_crash(identified_run, tmp_path):
+    """The collision model's own A4 crash (paper_identified), rendered and tracked."""
+    from identify.synthetic import TRAJECTORY_FIELDS, render_crash
+    from sim import events_ms
+    from video.io import open_film
+
+    n = 121  # 120 ms after contact
+    arrays = {k: np.asarray(getattr(identified_run, k))[:n]
+              for k in TRAJECTORY_FIELDS + ("front_margin", "rear_margin")}
+    path = tmp_path / "a4"
+    meta = render_crash("audi_a4", arrays, path, speed=56.3 / 3.6, width=1280, height=560,
+                        m_per_px=0.004, direction=-1)
+    with open(ROOT / "data" / "vehicles" / "audi_a4.toml", "rb") as fh:
+        car = car_geometry(tomllib.load(fh))
+    tracks = track_film(open_film(path, fps=1000.0), car)
+    from video.render import read_truth
+
+    _, truth = read_truth(path)
+    assert tracks.contact_frame == meta["contact_frame"]
+    x_true = truth["x_m"] - truth["x_m"][tracks.contact_frame]
+    assert np.sqrt(np.nanmean((tracks.channels["x_m"] - x_true) ** 2)) < 0.002
+    pitch_err = np.degrees(tracks.channels["pitch_rad"] - truth["pitch_rad"])
+    assert np.sqrt(np.nanmean(pitch_err**2)) < 0.2
+    assert tracks.impact_speed_mps == pytest.approx(56.3 / 3.6, rel=0.005)
+    lift = events_ms(identified_run)["rear_wheel_lift"]
+    assert tracks.events_ms["rear_wheel_lift"] == pytest.approx(lift, abs=2.0)
+    assert "front_wheel_block" not in tracks.events_ms
+
+
+def test_camera_roll_is_taken_out(clean_film):
+    """The same film seen by a camera rolled by 1 degree: x, z, pitch unchanged."""
+    import cv2
+
+    car, film, truth, meta = clean_film
+    h, w = film[0].shape
+    M = cv2.getRotationMatrix2D(((w - 1) / 2, (h - 1) / 2), -1.0, 1.0)  # 1 deg clockwise
+    rolled = ArrayFilm([cv2.warpAffine(f, M, (w, h), flags=cv2.INTER_LINEAR,
+                                       borderMode=cv2.BORDER_REPLICATE) for f in film])
+    tracks = track_film(rolled, car)
+    cf = tracks.contact_frame
+    assert abs(cf - meta["contact_frame"]) <= 1
+    for key in ("x_m", "z_m"):
+        want = truth[key] - truth[key][cf]
+        assert np.sqrt(np.nanmean((tracks.channels[key] - want) ** 2)) < 0.002, key
+    pitch_err = np.degrees(tracks.channels["pitch_rad"] - truth["pitch_rad"])
+    assert np.sqrt(np.nanmean(pitch_err**2)) < 0.2
+    roll = [n for n in tracks.notes if n.startswith("camera roll")]
+    assert roll and "+1.0" in roll[0]
+
+
+def test_prefetch_keeps_order_and_passes_errors_on():
+    from video.track import prefetch
+
+    frames = [np.full((4, 4), i, np.uint8) for i in range(20)]
+    assert [int(f[0, 0]) for f in prefetch(iter(frames), depth=3)] == list(range(20))
+
+    def broken():
+        yield frames[0]
+        raise VideoError("frame 1 of film.mp4 cannot be decoded")
+
+    got = []
+    with pytest.raises(VideoError, match="frame 1"):
+        for f in prefetch(broken()):
+            got.append(f)
+    assert len(got) == 1
+
+
+def test_classify_many_targets_finds_the_rigid_group():
+    """20 targets (the inner corners of a two-row checker tape, say) stay tractable."""
+    n = 40
+    rng = np.random.default_rng(3)
+    ref = rng.uniform(0, 800, (16, 2))
+    uv = np.zeros((n, 20, 2))
+    for i in range(n):
+        phi = 0.001 * i
+        R = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
+        uv[i, :16] = (ref - 400) @ R.T + 400 + [5.0 * i, 0.0]
+        uv[i, 16:] = ref[:4] + [[3.0 * i + 0.1 * i**2, 0.0]] * 4 + rng.normal(0, 0.1, (4, 2)) \
+            + np.arange(4)[:, None] * [0.0, 0.05 * i]
+    roles = classify_targets(uv, np.zeros((n, 20)))
+    assert roles.direction == 1
+    assert list(roles.body) == list(range(16))
+    assert roles.kind[16:] == ("other",) * 4
+
+
+def test_repeated_frame_while_moving_is_not_a_measurement(clean_film):
+    """A re-encoded film repeats frame 12: that copy is blanked, not used as data."""
+    car, film, truth, meta = clean_film
+    frames = film.frames[:13] + [film.frames[12]] + film.frames[13:]
+    dup = ArrayFilm(frames)
+    dup.duplicates = np.array([13])
+    tracks = track_film(dup, car)
+    assert np.isnan(tracks.channels["x_m"][13])
+    assert np.isnan(tracks.channels["target0_u_px"][13])
+    assert np.isfinite(tracks.channels["x_m"][12]) and np.isfinite(tracks.channels["x_m"][14])
+    assert any("repeat the frame before" in n and "13" in n for n in tracks.notes)
+    assert abs(tracks.contact_frame - (meta["contact_frame"] + 1)) <= 1

@@ -1,0 +1,848 @@
+"""From tracked target centres to the car's motion in metres and seconds.
+
+Steps, each a pure function over arrays:
+
+- ``classify_targets``: which targets are fixed (barrier, floor), which turn with a wheel
+  (their pattern spins), which form the rigid passenger cell (moving targets whose mutual
+  distances stay constant), and the direction of travel in the image;
+- ``rigid_fit``: least-squares rigid (Procrustes) fit of the body targets of a frame to
+  their positions in the reference frame: rotation and translation, residual;
+- ``body_pose``: image position of the CG and body rotation in every frame, with a
+  one-sigma uncertainty from the detection noise and the fit residuals;
+- ``cg_from_hubs``: the CG's image position from the hub centres and the vehicle file;
+- ``travel_axes`` / ``to_car_plane``: car-plane axes from the level approach (camera
+  roll taken out), pixels to car-plane metres;
+- ``contact_time``: the start of the deceleration, by fitting ``x = a + b (t - tc)
+  - c max(0, t - tc)^p`` (uniform motion, then the onset of a barrier force growing
+  with crush) on a fine grid of ``tc``; ``impact_speed``: line fit before contact;
+- ``kink_time`` / wheel events: the time a wheel stops turning (its spin angle leaves the
+  rolling angle the body's travel implies), turns again, leaves the floor (its centre
+  rises above the line it rolled along, ``floor_heights``) or lands again;
+- ``crush_from_pose``: crush as the rigid outline's travel past the contact position.
+
+Image positions are px ``(u, v)`` (v down); car-plane X is towards the barrier, Z up;
+pitch is nose-down positive; angles rad; times s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+from video.errors import VideoError
+
+__all__ = [
+    "Roles",
+    "classify_targets",
+    "rigid_fit",
+    "BodyPose",
+    "body_pose",
+    "cg_from_hubs",
+    "to_car_plane",
+    "travel_axes",
+    "contact_time",
+    "impact_speed",
+    "kink_time",
+    "block_time",
+    "unblock_time",
+    "lift_time",
+    "touchdown_time",
+    "crush_from_pose",
+    "floor_heights",
+]
+
+
+# ----------------------------------------------------------------- classification
+
+
+@dataclass(frozen=True)
+class Roles:
+    """What each tracked target is.
+
+    Attributes
+    ----------
+    kind : tuple of str
+        Per target: ``"body"``, ``"front_hub"``, ``"rear_hub"``, ``"fixed"`` or
+        ``"other"`` (moves but not rigidly with the body, e.g. on a crushing part).
+    direction : int
+        +1 if the car moves to the image's right, -1 to its left.
+    body : (B,) int
+        Indices of the body targets.
+    """
+
+    kind: tuple
+    direction: int
+    body: np.ndarray
+
+    def index(self, kind: str) -> int | None:
+        """Index of the (first) target of ``kind``, or None."""
+        return self.kind.index(kind) if kind in self.kind else None
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 2.0,
+                     spin_rad: float = 0.5, rigid_px: float = 0.6,
+                     rigid_rel: float = 0.002) -> Roles:
+    """Separate fixed, hub and rigid-body targets from their tracks.
+
+    Parameters
+    ----------
+    uv : (n, K, 2) float
+        Target centres per frame, px (NaN where lost).
+    angle : (n, K) float
+        Unwrapped pattern orientation per frame, rad (NaN where lost).
+    fixed_px : float
+        A target whose centre never moves further than this from its median is fixed, px.
+    spin_rad : float
+        A moving target whose pattern turns through more than this (beyond what the
+        body turns) is on a wheel hub, rad.
+    rigid_px, rigid_rel : float
+        Two targets are rigidly connected when the scatter (std) of their distance is
+        below ``rigid_px + rigid_rel * distance``, px.
+
+    Returns
+    -------
+    Roles
+
+    Raises
+    ------
+    VideoError
+        If no target moves, or fewer than two move rigidly together.
+    """
+    uv = np.asarray(uv, dtype=float)
+    n, K, _ = uv.shape
+    med = np.nanmedian(uv, axis=0)
+    spread = np.nanmax(np.hypot(*(uv - med).transpose(2, 0, 1)), axis=0)
+    moving = spread > fixed_px
+    if not moving.any():
+        raise VideoError("no target moves during the film: the car is not tracked; "
+                         "check that the film shows the approach and the crash")
+    first = np.array([uv[np.flatnonzero(np.isfinite(uv[:, k, 0]))[0], k] for k in range(K)])
+    # direction: the way the moving targets go during the first part of the film
+    du = []
+    for k in np.flatnonzero(moving):
+        ok = np.flatnonzero(np.isfinite(uv[:, k, 0]))
+        early = ok[: max(2, len(ok) // 4)]
+        du.append(uv[early[-1], k, 0] - uv[early[0], k, 0])
+    direction = 1 if np.nanmedian(du) >= 0 else -1
+    turn = np.nanmax(angle, axis=0) - np.nanmin(angle, axis=0)
+    body_turn = np.nanmedian(turn[moving])
+    hub = moving & (turn > spin_rad + min(body_turn, spin_rad))
+    cand = np.flatnonzero(moving & ~hub)
+    # rigid pairs among the candidates
+    rigid = np.zeros((K, K), bool)
+    for i, j in combinations(cand, 2):
+        d = np.hypot(*(uv[:, i] - uv[:, j]).T)
+        d = d[np.isfinite(d)]
+        if len(d) >= 3 and np.std(d) < rigid_px + rigid_rel * np.mean(d):
+            rigid[i, j] = rigid[j, i] = True
+    best = _largest_clique(cand, rigid)
+    if len(best) < 2:
+        raise VideoError(f"fewer than two targets move rigidly together (moving targets: "
+                         f"{int(moving.sum())}, of them on wheels: {int(hub.sum())}); the "
+                         "passenger cell needs at least two quadrant targets in view")
+    kind = ["other"] * K
+    for k in range(K):
+        if not moving[k]:
+            kind[k] = "fixed"
+    for k in best:
+        kind[k] = "body"
+    hubs = np.flatnonzero(hub)
+    if len(hubs):
+        # front = further along the direction of travel
+        pos = direction * np.array([first[k, 0] for k in hubs])
+        order = hubs[np.argsort(-pos)]
+        kind[order[0]] = "front_hub"
+        if len(order) > 1:
+            kind[order[-1]] = "rear_hub"
+    return Roles(kind=tuple(kind), direction=direction, body=np.array(best, dtype=int))
+
+
+def _largest_clique(cand: np.ndarray, linked: np.ndarray, exact_up_to: int = 12) -> tuple:
+    """Largest set of candidates all pairwise linked: exhaustive for up to
+    ``exact_up_to`` candidates, else greedy (most-linked first)."""
+    cand = [int(c) for c in cand]
+    if len(cand) <= exact_up_to:
+        for size in range(len(cand), 1, -1):
+            for sub in combinations(cand, size):
+                if all(linked[i, j] for i, j in combinations(sub, 2)):
+                    return sub
+        return ()
+    order = sorted(cand, key=lambda i: -int(linked[i, cand].sum()))
+    best: tuple = ()
+    for seed in order[:5]:
+        group = [seed]
+        for j in order:
+            if j not in group and all(linked[j, g] for g in group):
+                group.append(j)
+        if len(group) > len(best):
+            best = tuple(sorted(group))
+    return best if len(best) >= 2 else ()
+
+
+# ------------------------------------------------------------------- rigid fitting
+
+
+def rigid_fit(ref: np.ndarray, cur: np.ndarray, weights: np.ndarray | None = None
+              ) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares rotation and translation taking ``ref`` points onto ``cur``.
+
+    Parameters
+    ----------
+    ref, cur : (N, 2) float
+        Matching points (N >= 2), px.
+    weights : (N,) float, optional
+        Weights (inverse variances).
+
+    Returns
+    -------
+    phi : float
+        Rotation, rad (image angle: positive turns ``+u`` towards ``+v``, clockwise on
+        the screen).
+    ref_c, cur_c : (2,) float
+        Weighted centroids: ``cur ~ cur_c + R(phi) (ref - ref_c)``.
+    residuals : (N, 2) float
+        ``cur - fitted``, px.
+    """
+    w = np.ones(len(ref)) if weights is None else np.asarray(weights, dtype=float)
+    w = w / w.sum()
+    rc = w @ ref
+    cc = w @ cur
+    a = ref - rc
+    b = cur - cc
+    cross = np.sum(w * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
+    dot = np.sum(w * (a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]))
+    phi = float(np.arctan2(cross, dot))
+    R = _rot(phi)
+    fitted = cc + a @ R.T
+    return phi, rc, cc, cur - fitted
+
+
+def _rot(phi: float) -> np.ndarray:
+    c, s = np.cos(phi), np.sin(phi)
+    return np.array([[c, -s], [s, c]])
+
+
+@dataclass(frozen=True)
+class BodyPose:
+    """The passenger cell's image pose per frame.
+
+    Attributes
+    ----------
+    point : (n, 2) float
+        Image position of the tracked body point (the CG), px; NaN where fewer than two
+        body targets were seen.
+    point_sigma : (n,) float
+        One-sigma uncertainty of ``point`` per axis, px.
+    phi : (n,) float
+        Body rotation from the reference frame, rad (image angle, clockwise positive).
+    phi_sigma : (n,) float
+        Its one-sigma uncertainty, rad.
+    rms_px : (n,) float
+        RMS residual of the rigid fit, px.
+    n_targets : (n,) int
+        Body targets used in each frame.
+    ref_frame : int
+        Frame whose target positions are the reference.
+    """
+
+    point: np.ndarray
+    point_sigma: np.ndarray
+    phi: np.ndarray
+    phi_sigma: np.ndarray
+    rms_px: np.ndarray
+    n_targets: np.ndarray
+    ref_frame: int
+
+    def transform(self, i: int, p_ref: np.ndarray) -> np.ndarray:
+        """Where body points ``p_ref`` (M, 2) px of the reference frame are in frame ``i``."""
+        return self.point[i] + (np.asarray(p_ref) - self._ref_point) @ _rot(self.phi[i]).T
+
+    @property
+    def _ref_point(self) -> np.ndarray:
+        return self.point[self.ref_frame]
+
+
+def body_pose(uv: np.ndarray, sigma_px: np.ndarray, body: np.ndarray, point_ref: np.ndarray,
+              ref_frame: int) -> BodyPose:
+    """Rigid fit of the body targets in every frame; follow one body point.
+
+    Parameters
+    ----------
+    uv : (n, K, 2) float
+        Target centres, px (NaN where lost).
+    sigma_px : (n, K) float
+        One-sigma detection uncertainty per centre and axis, px.
+    body : (B,) int
+        Indices of the body targets (B >= 2).
+    point_ref : (2,) float
+        The followed body point (the CG) in the reference frame's image, px.
+    ref_frame : int
+        Reference frame; every body target must be seen in it.
+
+    Returns
+    -------
+    BodyPose
+        Frames with fewer than two body targets are NaN.
+    """
+    n = uv.shape[0]
+    ref = uv[ref_frame, body]
+    if not np.all(np.isfinite(ref)):
+        raise VideoError(f"a body target is not seen in the reference frame {ref_frame}")
+    point = np.full((n, 2), np.nan)
+    psig = np.full(n, np.nan)
+    phi = np.full(n, np.nan)
+    phis = np.full(n, np.nan)
+    rms = np.full(n, np.nan)
+    used = np.zeros(n, int)
+    for i in range(n):
+        cur = uv[i, body]
+        ok = np.all(np.isfinite(cur), axis=1) & np.isfinite(sigma_px[i, body])
+        m = int(ok.sum())
+        used[i] = m
+        if m < 2:
+            continue
+        s = np.maximum(sigma_px[i, body][ok], 1e-3)
+        w = 1.0 / s**2
+        p, rc, cc, res = rigid_fit(ref[ok], cur[ok], w)
+        phi[i] = p
+        point[i] = cc + _rot(p) @ (point_ref - rc)
+        r2 = float(np.sum(res**2))
+        dof = 2 * m - 3
+        s_det = float(np.sqrt(np.mean(s**2)))
+        s_fit = np.sqrt(r2 / dof) / np.sqrt(2.0) if dof > 0 else 0.0
+        s_pt = max(s_det, s_fit)
+        a = ref[ok] - rc
+        spread = float(np.sum(a**2))
+        phis[i] = s_pt / np.sqrt(spread)
+        lever = float(np.hypot(*(point_ref - rc)))
+        psig[i] = np.sqrt(s_pt**2 / m + (lever * phis[i]) ** 2)
+        rms[i] = np.sqrt(r2 / m)
+    return BodyPose(point=point, point_sigma=psig, phi=phi, phi_sigma=phis, rms_px=rms,
+                    n_targets=used, ref_frame=ref_frame)
+
+
+def cg_from_hubs(front_uv: np.ndarray, rear_uv: np.ndarray, direction: int, m_per_px: float,
+                 x_cg_from_rear_axle: float, cg_above_axles: float) -> tuple[np.ndarray, np.ndarray]:
+    """Image position of the CG from the two hub centres of one frame.
+
+    Parameters
+    ----------
+    front_uv, rear_uv : (2,) float
+        Hub centres, px (wheel centres at the axles: car at rest on level ground).
+    direction : int
+        +1 or -1 (travel to the image's right or left).
+    m_per_px : float
+        Scale in the car plane, m/px.
+    x_cg_from_rear_axle : float
+        CG ahead of the rear axle, m.
+    cg_above_axles : float
+        CG height above the axle line (cg_height - wheel_radius), m.
+
+    Returns
+    -------
+    cg_uv : (2,) float
+        px.
+    axes : (2, 2) float
+        Image unit vectors of the vehicle frame's x (forward) and z (up).
+    """
+    ex = np.asarray(front_uv, float) - np.asarray(rear_uv, float)
+    ex = ex / np.hypot(*ex)
+    ez = direction * np.array([ex[1], -ex[0]])
+    cg = np.asarray(rear_uv, float) + (x_cg_from_rear_axle * ex + cg_above_axles * ez) / m_per_px
+    return cg, np.stack([ex, ez])
+
+
+def to_car_plane(duv: np.ndarray, direction: int, m_per_px: float,
+                 axes: np.ndarray | None = None) -> np.ndarray:
+    """Image displacements to car-plane displacements.
+
+    Parameters
+    ----------
+    duv : (..., 2) float
+        Displacements in the image, px.
+    direction : int
+        +1 (travel to the image's right) or -1.
+    m_per_px : float
+        Scale, m/px.
+    axes : (2, 2) float, optional
+        Image unit vectors of car-plane X (travel) and Z (up), e.g. from
+        :func:`travel_axes`; default: the image axes (``X = direction * u``, ``Z = -v``).
+
+    Returns
+    -------
+    (..., 2) float
+        ``[dX, dZ]``, m.
+    """
+    duv = np.asarray(duv, dtype=float)
+    if axes is None:
+        return np.stack([direction * duv[..., 0], -duv[..., 1]], axis=-1) * m_per_px
+    return np.stack([duv @ axes[0], duv @ axes[1]], axis=-1) * m_per_px
+
+
+def travel_axes(points: np.ndarray, stop: int, direction: int) -> tuple[np.ndarray, float]:
+    """Car-plane axes in the image from the approach: the car runs level before contact.
+
+    A straight line is fitted (total least squares) to a body point's image positions in
+    the frames before ``stop``; its direction, pointing the way the car travels, is
+    car-plane X; Z is perpendicular to it, upwards. This removes the camera's roll.
+
+    Parameters
+    ----------
+    points : (n, 2) float
+        A body point per frame (e.g. the CG), px; NaN where not measured.
+    stop : int
+        First frame not used (contact).
+    direction : int
+        +1 or -1.
+
+    Returns
+    -------
+    axes : (2, 2) float
+        Unit vectors of X and Z in the image.
+    roll : float
+        Camera roll, rad (image angle of the travel direction against the image's u
+        axis, clockwise positive).
+    """
+    p = np.asarray(points, float)[:stop]
+    p = p[np.all(np.isfinite(p), axis=1)]
+    if len(p) < 5 or np.ptp(p[:, 0]) < 20:
+        ex = np.array([float(direction), 0.0])
+    else:
+        c = p - p.mean(axis=0)
+        _, _, vt = np.linalg.svd(c, full_matrices=False)
+        ex = vt[0] / np.hypot(*vt[0])
+        if ex[0] * direction < 0:
+            ex = -ex
+    ez = direction * np.array([ex[1], -ex[0]])
+    roll = float(np.arctan2(direction * ex[1], direction * ex[0]))
+    return np.stack([ex, ez]), roll
+
+
+# ----------------------------------------------------------------------- contact
+
+
+def impact_speed(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, stop: int
+                 ) -> tuple[float, float]:
+    """Speed from a weighted line fit to ``x`` over the frames before ``stop``.
+
+    Parameters
+    ----------
+    t, x, sigma : (n,) float
+        Time s, displacement m, its one-sigma m.
+    stop : int
+        First frame not used (the contact frame).
+
+    Returns
+    -------
+    speed, speed_sigma : float
+        m/s.
+    """
+    ok = np.isfinite(x[:stop]) & np.isfinite(sigma[:stop])
+    if ok.sum() < 3:
+        raise VideoError(f"only {int(ok.sum())} frames before contact have the car's position; "
+                         "the impact speed needs at least 3 (give --speed)")
+    tt, xx, ss = t[:stop][ok], x[:stop][ok], np.maximum(sigma[:stop][ok], 1e-9)
+    A = np.stack([np.ones_like(tt), tt - tt.mean()], axis=1) / ss[:, None]
+    coef, *_ = np.linalg.lstsq(A, xx / ss, rcond=None)
+    cov = np.linalg.inv(A.T @ A)
+    res = (xx - (coef[0] + coef[1] * (tt - tt.mean()))) / ss
+    chi = max(1.0, float(np.sum(res**2)) / max(len(tt) - 2, 1))
+    return float(coef[1]), float(np.sqrt(cov[1, 1] * chi))
+
+
+def _onset_sse(t, x, w, tc, p):
+    d = np.maximum(t - tc, 0.0) ** p
+    A = np.stack([np.ones_like(t), t - tc, -d], axis=1) * w[:, None]
+    coef, *_ = np.linalg.lstsq(A, x * w, rcond=None)
+    r = A @ coef - x * w
+    return float(r @ r), coef
+
+
+def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
+                 window_after_s: float = 0.012) -> tuple[float, str]:
+    """Time at which the car's deceleration starts, s (sub-frame).
+
+    A first guess is where the speed (differences of ``x`` over 5 frames) falls 2 %
+    below the approach speed and stays there for 10 samples; the onset model ``x = a + b (t - tc) - c max(0, t -
+    tc)^p`` (p = 2: a force that jumps at contact; p = 3: a force growing with crush) is
+    then fitted for every ``tc`` on a grid of 0.02 frame around it, by weighted linear
+    least squares in ``a, b, c``; the best ``(tc, p)`` wins.
+
+    Parameters
+    ----------
+    t, x, sigma : (n,) float
+        Frame times s, CG displacement towards the barrier m, its one-sigma m.
+    fps : float
+        Frames per second.
+    window_after_s : float
+        How far past the first guess the fit reaches, s.
+
+    Returns
+    -------
+    tc : float
+        Contact time, s, on the clock of ``t``.
+    how : str
+        A short description for the notes.
+    """
+    ok = np.isfinite(x)
+    if ok.sum() < 10:
+        raise VideoError("fewer than 10 frames with the car's position; cannot find the contact")
+    idx = np.flatnonzero(ok)
+    tt, xx = t[ok], x[ok]
+    ss = np.maximum(np.where(np.isfinite(sigma[ok]), sigma[ok], np.nanmedian(sigma)), 1e-7)
+    lag = 5
+    v = (xx[lag:] - xx[:-lag]) / (tt[lag:] - tt[:-lag])
+    n0 = max(3, len(v) // 8)
+    v0 = float(np.median(v[:n0]))
+    if not v0 > 0:
+        raise VideoError("the car does not move towards the barrier at the start of the film; "
+                         "the film must begin before contact")
+    # the deceleration persists (a repeated frame makes a dip of only ``lag`` samples)
+    below = (v < 0.98 * v0).astype(int)
+    run = 2 * lag
+    slow = np.flatnonzero(np.convolve(below, np.ones(run, int), mode="valid") == run)
+    if len(slow) == 0:
+        raise VideoError("the car never decelerates in the film: no contact with the barrier "
+                         "found; check that the film includes the impact")
+    # v[j] is the speed between samples j and j + lag, centred at j + lag / 2
+    guess = tt[min(slow[0] + lag, len(tt) - 1)]
+    lo = guess - 0.03
+    hi_fit = guess + window_after_s
+    sel = (tt >= lo - 0.03) & (tt <= hi_fit)
+    if sel.sum() < 8:
+        raise VideoError("too few frames around the contact to locate it")
+    ts, xs, ws = tt[sel], xx[sel], 1.0 / ss[sel]
+    dt = 1.0 / fps
+    grid = np.arange(lo, guess + 2 * dt, 0.02 * dt)
+    best = (np.inf, None, None)
+    for p in (2.0, 3.0):
+        tc, sse = _coarse_to_fine(grid, lambda tc, p=p: _onset_sse(ts, xs, ws, tc, p)[0])
+        if sse < best[0]:
+            best = (sse, tc, p)
+    _, tc, p = best
+    del idx
+    return float(tc), f"contact from the onset of deceleration (model exponent {p:g})"
+
+
+# ------------------------------------------------------------------- wheel events
+
+
+def kink_time(t: np.ndarray, y: np.ndarray, sigma: np.ndarray, model, grid: np.ndarray
+              ) -> tuple[float, float]:
+    """Best break time of a model with linear parameters.
+
+    Parameters
+    ----------
+    t, y, sigma : (m,) float
+        Samples (NaN-free) and their one-sigma.
+    model : callable
+        ``model(t, tb) -> (m, P)`` design matrix for break time ``tb``.
+    grid : (G,) float
+        Candidate break times, s.
+
+    Returns
+    -------
+    tb : float
+        Break time with the least weighted squared residual, s.
+    sse : float
+        That residual sum (chi-square).
+    """
+    w = 1.0 / np.maximum(sigma, 1e-12)
+    grid = np.asarray(grid, dtype=float)
+
+    def sse_at(tb):
+        A = model(t, tb) * w[:, None]
+        coef, *_ = np.linalg.lstsq(A, y * w, rcond=None)
+        r = A @ coef - y * w
+        return float(r @ r)
+
+    return _coarse_to_fine(grid, sse_at)
+
+
+def _coarse_to_fine(grid: np.ndarray, f, stride: int = 10) -> tuple[float, float]:
+    """Minimum of ``f`` over ``grid``: every ``stride``-th point first, then every point
+    within ``stride`` of the best (``f`` is smooth in the break time at this scale)."""
+    if len(grid) == 0:
+        return float("nan"), float("inf")
+    coarse = np.arange(0, len(grid), stride)
+    vals = np.array([f(grid[i]) for i in coarse])
+    k = int(coarse[int(np.argmin(vals))])
+    lo, hi = max(0, k - stride), min(len(grid), k + stride + 1)
+    fine = np.array([f(grid[i]) for i in range(lo, hi)])
+    j = int(np.argmin(fine))
+    return float(grid[lo + j]), float(fine[j])
+
+
+def _linear_fit(A: np.ndarray, y: np.ndarray, sigma: np.ndarray) -> tuple[np.ndarray, float]:
+    """Weighted least squares ``y ~ A coef``: (coef, chi-square)."""
+    w = 1.0 / np.maximum(sigma, 1e-12)
+    coef, *_ = np.linalg.lstsq(A * w[:, None], y * w, rcond=None)
+    r = (A @ coef - y) * w
+    return coef, float(r @ r)
+
+
+#: Smallest drop of chi-square that a break (event) must bring over the model without it.
+MIN_EVENT_CHI2 = 25.0
+
+
+def _finite(*arrs):
+    ok = np.ones(len(arrs[0]), bool)
+    for a in arrs:
+        ok &= np.isfinite(a)
+    return ok
+
+
+def block_time(t: np.ndarray, spin: np.ndarray, spin_sigma: np.ndarray, rolling: np.ndarray,
+               t_from: float, fps: float) -> float | None:
+    """When a wheel stops turning (after ``t_from``), s; None if it never does.
+
+    Parameters
+    ----------
+    t : (n,) float
+        s.
+    spin : (n,) float
+        Measured wheel spin angle, rad (forward positive).
+    spin_sigma : (n,) float
+        Its one-sigma, rad.
+    rolling : (n,) float
+        The angle a rolling wheel would have turned (hub travel / wheel radius), rad.
+    t_from : float
+        Look only after this time (contact), s.
+    fps : float
+
+    Notes
+    -----
+    First guess: the first frame after ``t_from`` where the wheel turns less than a
+    quarter of the rolling rate (over 3 frames). Refined by fitting
+    ``spin = a + k rolling(min(t, tb))`` for ``tb`` on a 0.02-frame grid.
+    """
+    ok = _finite(spin, rolling, spin_sigma)
+    i = np.flatnonzero(ok & (t >= t_from))
+    if len(i) < 6:
+        return None
+    lag = 3
+    ds = spin[i[lag:]] - spin[i[:-lag]]
+    dr = rolling[i[lag:]] - rolling[i[:-lag]]
+    thr = np.maximum(0.25 * np.abs(dr), 4 * np.median(spin_sigma[ok]))
+    slow = np.flatnonzero((np.abs(ds) < thr) & (np.abs(dr) > 2 * thr))
+    if len(slow) == 0:
+        return None
+    guess = t[i[slow[0]]]
+    dt = 1.0 / fps
+    sel = ok & (t >= guess - 15 * dt) & (t <= guess + 15 * dt)
+    ts, ys, ss = t[sel], spin[sel], spin_sigma[sel]
+    tr, rr = t[ok], rolling[ok]
+
+    def model(tq, tb):
+        return np.stack([np.ones_like(tq), np.interp(np.minimum(tq, tb), tr, rr)], axis=1)
+
+    grid = np.arange(guess - 6 * dt, guess + 4 * dt, 0.02 * dt)
+    tb, chi = kink_time(ts, ys, ss, model, grid)
+    coef, _ = _linear_fit(model(ts, tb), ys, ss)
+    _, chi0 = _linear_fit(model(ts, ts[-1] + 1.0), ys, ss)  # rolling throughout
+    if not (0.5 < coef[1] < 1.5) or chi0 - chi < MIN_EVENT_CHI2:
+        return None
+    return tb
+
+
+def unblock_time(t: np.ndarray, spin: np.ndarray, spin_sigma: np.ndarray, rolling: np.ndarray,
+                 t_block: float, fps: float) -> float | None:
+    """When a blocked wheel turns again (after ``t_block``), s; None if it does not.
+
+    First guess: the first frame after the block where the angle has left its blocked
+    value by more than 5 sigma and 0.02 rad and keeps leaving it; refined by fitting
+    ``spin = a + k (rolling(max(t, tu)) - rolling(tu))``.
+    """
+    ok = _finite(spin, rolling, spin_sigma)
+    dt = 1.0 / fps
+    after = ok & (t >= t_block + 3 * dt)
+    i = np.flatnonzero(after)
+    if len(i) < 6:
+        return None
+    held = np.median(spin[i[:3]])
+    tol = np.maximum(5 * spin_sigma[i], 0.02)
+    away = np.abs(spin[i] - held) > tol
+    run = np.flatnonzero(away[:-2] & away[1:-1] & away[2:])
+    if len(run) == 0:
+        return None
+    guess = t[i[run[0]]]
+    sel = ok & (t >= max(t_block + dt, guess - 15 * dt)) & (t <= guess + 10 * dt)
+    ts, ys, ss = t[sel], spin[sel], spin_sigma[sel]
+    tr, rr = t[ok], rolling[ok]
+
+    def model(tq, tu):
+        base = np.interp(tu, tr, rr)
+        return np.stack([np.ones_like(tq), np.interp(np.maximum(tq, tu), tr, rr) - base], axis=1)
+
+    grid = np.arange(guess - 10 * dt, guess + 2 * dt, 0.02 * dt)
+    tu, chi = kink_time(ts, ys, ss, model, grid)
+    coef, _ = _linear_fit(model(ts, tu), ys, ss)
+    _, chi0 = _linear_fit(np.ones((len(ts), 1)), ys, ss)  # blocked throughout
+    if abs(coef[1]) < 0.2 or chi0 - chi < MIN_EVENT_CHI2:
+        return None
+    return tu
+
+
+def lift_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_from: float, fps: float,
+              min_lift_m: float = 0.002) -> float | None:
+    """When a wheel leaves the floor (after ``t_from``), s; None if it stays down.
+
+    First guess: the first frame after ``t_from`` from which the wheel centre stays
+    higher than ``max(min_lift_m, 5 sigma)`` above the floor for 5 frames. Refined by
+    fitting ``h = a + b tau``, ``a + c tau^2`` or ``a + b tau + c tau^2``, ``tau = max(0,
+    t - tl)``, on a 0.02-frame grid, the one with the least BIC: a wheel leaves the floor
+    with a jump of its upward speed (it goes on with the body's axle, the suspension at
+    full extension), of its upward acceleration (the suspension's pull), or both.
+    """
+    ok = _finite(height, sigma)
+    i = np.flatnonzero(ok & (t >= t_from))
+    if len(i) < 8:
+        return None
+    thr = np.maximum(min_lift_m, 5 * sigma[i])
+    up = height[i] > thr
+    k = np.flatnonzero(np.convolve(up.astype(int), np.ones(5, int), mode="valid") == 5)
+    if len(k) == 0:
+        return None
+    guess = t[i[k[0]]]
+    dt = 1.0 / fps
+    sel = ok & (t >= max(t_from - 10 * dt, guess - 40 * dt)) & (t <= guess + 8 * dt)
+    ts, ys, ss = t[sel], height[sel], sigma[sel]
+    grid = np.arange(max(t_from - 2 * dt, guess - 35 * dt), guess + dt, 0.02 * dt)
+
+    best = (np.inf, None, None)
+    for powers in ((1,), (2,), (1, 2)):
+        def model(tq, tb, powers=powers):
+            tau = np.maximum(tq - tb, 0.0)
+            return np.stack([np.ones_like(tq)] + [tau**p for p in powers], axis=1)
+
+        tb, chi = kink_time(ts, ys, ss, model, grid)
+        bic = chi + (len(powers) + 2) * np.log(len(ts))
+        if bic < best[0]:
+            best = (bic, tb, model)
+    _, tb, model = best
+    coef, chi = _linear_fit(model(ts, tb), ys, ss)
+    _, chi0 = _linear_fit(np.ones((len(ts), 1)), ys, ss)  # on the floor throughout
+    if model(ts[-1:], tb)[0, 1:] @ coef[1:] <= 0 or chi0 - chi < MIN_EVENT_CHI2:
+        return None
+    return tb
+
+
+def touchdown_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_lift: float,
+                   fps: float, min_lift_m: float = 0.002) -> float | None:
+    """When a lifted wheel is back on the floor, s (first frame at or below the lift
+    threshold after having been above it), interpolated; None if it stays up."""
+    ok = _finite(height, sigma)
+    i = np.flatnonzero(ok & (t > t_lift))
+    if len(i) < 3:
+        return None
+    thr = np.maximum(min_lift_m, 5 * sigma[i])
+    up = height[i] > thr
+    if not up.any():
+        return None
+    first_up = int(np.flatnonzero(up)[0])
+    down = np.flatnonzero(~up[first_up:])
+    if len(down) == 0:
+        return None
+    j = first_up + int(down[0])
+    a, b = i[j - 1], i[j]
+    # the floor is where the height returns to zero: extrapolate the last descent
+    h0, h1 = height[a], height[b]
+    if h0 > h1:
+        frac = np.clip(h0 / (h0 - h1), 0.0, 1.5)
+        return float(t[a] + frac * (t[b] - t[a]))
+    return float(t[b])
+
+
+# ------------------------------------------------------------------------- floor
+
+
+def floor_heights(hubs_uv: list, before: int, m_per_px: float) -> tuple[list, np.ndarray]:
+    """Heights of wheel centres above the path they roll along, m.
+
+    Before contact the wheels roll on the floor: their centres trace one image curve,
+    the "floor line" of the hub centres (straight for a level floor and an ideal lens;
+    tilted by camera roll, bent by uncorrected lens distortion). A polynomial
+    ``v = p(u)`` (degree 2 when the hubs cover more than 300 px of ``u``, else 1) is
+    fitted to every hub centre of the frames before ``before``, each hub with its own
+    offset; a hub's height is how far above that curve it is.
+
+    Parameters
+    ----------
+    hubs_uv : list of (n, 2) float
+        Centres of each hub target per frame, px (NaN where lost).
+    before : int
+        First frame not used for the fit (the contact frame).
+    m_per_px : float
+        Scale, m/px.
+
+    Returns
+    -------
+    heights : list of (n,) float
+        Per hub, m (0 on the floor, positive up).
+    coef : (deg + 1,) float
+        The floor line's polynomial (numpy.polyval order, shared part), px.
+    """
+    us, vs, which = [], [], []
+    for j, uv in enumerate(hubs_uv):
+        ok = np.isfinite(uv[:before, 0])
+        us.append(uv[:before, 0][ok])
+        vs.append(uv[:before, 1][ok])
+        which.append(np.full(int(ok.sum()), j))
+    u = np.concatenate(us)
+    v = np.concatenate(vs)
+    w = np.concatenate(which)
+    if len(u) < 3:
+        return [np.full(len(h), np.nan) for h in hubs_uv], np.zeros(2)
+    deg = 2 if np.ptp(u) > 300 else 1
+    uc = np.mean(u)
+    cols = [(u - uc) ** p for p in range(deg, 0, -1)]
+    cols += [(w == j).astype(float) for j in range(len(hubs_uv))]
+    A = np.stack(cols, axis=1)
+    coef, *_ = np.linalg.lstsq(A, v, rcond=None)
+    out = []
+    for j, uv in enumerate(hubs_uv):
+        curve = sum(coef[i] * (uv[:, 0] - uc) ** (deg - i) for i in range(deg)) + coef[deg + j]
+        out.append((curve - uv[:, 1]) * m_per_px)
+    return out, coef[:deg]
+
+
+# ------------------------------------------------------------------------- crush
+
+
+def crush_from_pose(x: np.ndarray, pitch: np.ndarray, silhouette: np.ndarray, x_cg: float,
+                    cg_height: float, x_front_at_contact: float) -> np.ndarray:
+    """Crush from the rigid passenger cell's pose, m.
+
+    The undeformed silhouette is carried with the body; crush is how far its front-most
+    point has passed the position the front end had at first contact (the barrier
+    face): ``max(0, x + max_i[(px_i - x_cg) cos th + (pz_i - h) sin th] - x_front0)``,
+    with ``x_front0`` the front end's distance ahead of the CG at contact.
+
+    Parameters
+    ----------
+    x, pitch : (n,) float
+        CG displacement from contact (m) and pitch (rad, nose-down positive).
+    silhouette : (N, 2) float
+        Vehicle-frame side outline, m.
+    x_cg, cg_height : float
+        CG in the vehicle frame, m.
+    x_front_at_contact : float
+        Front end ahead of the CG at contact, car-plane X, m (displacement reference).
+
+    Returns
+    -------
+    (n,) float
+        >= 0, NaN where ``x`` or ``pitch`` is NaN.
+    """
+    sil = np.asarray(silhouette, float)
+    c, s = np.cos(pitch)[:, None], np.sin(pitch)[:, None]
+    reach = ((sil[:, 0] - x_cg)[None, :] * c + (sil[:, 1] - cg_height)[None, :] * s).max(axis=1)
+    out = np.maximum(x + reach - x_front_at_contact, 0.0)
+    out[~(np.isfinite(x) & np.isfinite(pitch))] = np.nan
+    return out

@@ -1,0 +1,105 @@
+"""Plain frozen dataclasses shared by the stages of ``video/`` (see CONVENTIONS.md).
+
+Lengths in m, times in s, angles in rad, image positions in px.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class CarGeometry:
+    """What the video stage knows of the vehicle (built by ``identify`` from its file).
+
+    Attributes
+    ----------
+    length, height, wheelbase, front_overhang, wheel_radius, cg_height, cg_to_front_axle :
+        float, m.
+    silhouette_side : (N, 2) float64
+        Closed side outline in the vehicle frame (x forward from the rear bumper, z up
+        from the ground), m.
+    windscreen_top : (2,) float64
+        Vehicle-frame point of the roof edge at the top of the windscreen, m.
+    """
+
+    length: float
+    height: float
+    wheelbase: float
+    front_overhang: float
+    wheel_radius: float
+    cg_height: float
+    cg_to_front_axle: float
+    silhouette_side: np.ndarray
+    windscreen_top: np.ndarray
+
+    @property
+    def x_cg(self) -> float:
+        """CG position along the vehicle frame's x, m: ``length - front_overhang -
+        cg_to_front_axle``."""
+        return self.length - self.front_overhang - self.cg_to_front_axle
+
+    @property
+    def front_axle_x(self) -> float:
+        """Front axle position along the vehicle frame's x, m."""
+        return self.length - self.front_overhang
+
+    @property
+    def rear_axle_x(self) -> float:
+        """Rear axle position along the vehicle frame's x, m."""
+        return self.length - self.front_overhang - self.wheelbase
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """The result of the video stage: measured motion per frame with its uncertainty.
+
+    Attributes
+    ----------
+    t : (n,) float64
+        Time of each frame, s, 0 at first contact.
+    channels : dict[str, (n,) float64]
+        Measured values by ``tracks.csv`` column name (``x_m``, ``z_m``, ``pitch_rad``,
+        ``crush_m``, wheel angles and heights, ``target<k>_u_px`` ...). NaN where not
+        measured.
+    sigma : dict[str, (n,) float64]
+        One-standard-deviation uncertainty per sample, same keys as ``channels``.
+    events_ms : dict[str, float | None]
+        Event times, ms after contact (``front_wheel_block`` ...).
+    contact_frame : int
+        Index of the first frame in which the bumper touches the barrier face.
+    fps : float
+        Recording rate, frames per second.
+    scale_m_per_px, scale_sigma : float
+        Scale in the car plane and its one-sigma uncertainty, m/px.
+    impact_speed_mps : float
+        Speed at contact, m/s.
+    direction : int
+        +1 if the car moves left-to-right in the image, -1 right-to-left.
+    notes : list[str]
+        Things a person should read (duplicated frames, lost targets ...).
+    contact_offset_s : float
+        Estimated instant of first contact relative to ``t = 0`` (the contact frame), s,
+        in about (-1/fps, 0]: the sub-frame contact time, for comparing with a model
+        whose clock starts at the contact instant.
+    overlay : dict
+        What the tracking report draws on the reference frame, px: ``frame`` (index),
+        ``tapes`` (list of (2, 2) end points), ``targets_uv`` (K, 2), ``target_kinds``
+        (K,), ``silhouette_px`` (N, 2) or None, ``cg_uv`` (2,).
+    """
+
+    t: np.ndarray
+    channels: dict
+    sigma: dict
+    events_ms: dict
+    contact_frame: int
+    fps: float
+    scale_m_per_px: float
+    scale_sigma: float
+    impact_speed_mps: float
+    direction: int
+    notes: list = field(default_factory=list)
+    contact_offset_s: float = 0.0
+    overlay: dict = field(default_factory=dict)
