@@ -6,7 +6,10 @@ Levenberg-Marquardt with exact forward-mode Jacobians through the JAX simulation
 several starting points at once (vmap) so that a local minimum is not taken for the answer.
 Parameters move in an unconstrained space (``identify.model.FreeParameter``); the
 covariance comes from the Jacobian at the optimum, mapped to physical units, scaled by the
-reduced chi-square when that exceeds 1 (misfit widens the intervals, never narrows them).
+reduced chi-square when that exceeds 1 (misfit widens the intervals, never narrows them),
+and with each channel's weight divided by its residuals' integrated autocorrelation time
+(tracking errors of neighbouring frames are correlated: n correlated samples carry the
+information of n / tau independent ones).
 """
 
 from __future__ import annotations
@@ -101,6 +104,7 @@ class FitResult:
     predictions: dict[str, np.ndarray]
     measurement: Measurement
     model: str = "base"
+    correlation_time: dict[str, float] = dataclasses.field(default_factory=dict)
 
     @property
     def rms_m(self) -> float:
@@ -128,7 +132,10 @@ def approach_speed(measurement: Measurement) -> float:
 
 
 def _stack(measurement: Measurement):
-    channels = tuple(c for c in FIT_CHANNELS if c in measurement.channels and measurement.valid(c).any())
+    channels = tuple(
+        c for c in FIT_CHANNELS
+        if c in measurement.channels and c not in measurement.derived and measurement.valid(c).any()
+    )
     if "x_m" not in channels and "vx_mps" not in channels:
         raise UserError(f"{measurement.source}: no x_m or vx_mps channel to fit (the car's motion towards the barrier)")
     y = np.stack([np.where(measurement.valid(c), measurement.channels[c], 0.0) for c in channels])
@@ -156,6 +163,25 @@ def _residual_fn(spec, channels, n_out, solver):
         return jnp.concatenate(out)
 
     return residuals
+
+
+def integrated_autocorrelation_time(residual: np.ndarray, max_lag: int = 50) -> float:
+    """tau = 1 + 2 * sum of the residual's autocorrelations, summed over lags while the
+    sums of neighbouring pairs stay positive (Geyer's initial positive sequence); 1 for
+    white noise, larger when neighbouring samples' errors are alike. Never below 1."""
+    r = np.asarray(residual, float)
+    r = r - r.mean()
+    n, var = len(r), float(r @ r)
+    if n < 10 or var <= 0:
+        return 1.0
+    rho = [float(r[:-k] @ r[k:]) / var for k in range(1, min(max_lag, n // 4) + 1)]
+    total = 0.0
+    for k in range(0, len(rho) - 1, 2):
+        pair = rho[k] + rho[k + 1]
+        if pair <= 0:
+            break
+        total += pair
+    return max(1.0, 1.0 + 2.0 * total)
 
 
 def _solve(spec, channels, n_out, options, data, u0):
@@ -297,8 +323,13 @@ def fit(
     # inversion is well conditioned. A direction the data do not constrain (eigenvalue ~ 0)
     # gets a huge variance, not the zero a pseudo-inverse would give it; and a parameter
     # pushed to the flat end of its transform keeps the variance the data give it.
+    n = len(measurement.t)
+    tau = {name: integrated_autocorrelation_time(r[c * n:(c + 1) * n][w[c] > 0]) for c, name in enumerate(channels)}
+    row_weight = np.ones(len(r))
+    for c, name in enumerate(channels):
+        row_weight[c * n:(c + 1) * n] = 1.0 / math.sqrt(tau[name])
     typical = np.array([p.typical for p in free])
-    jac_s = jac_u / np.maximum(dvalue_du, 1e-300)[None, :] * typical[None, :]
+    jac_s = row_weight[:, None] * jac_u / np.maximum(dvalue_du, 1e-300)[None, :] * typical[None, :]
     eigval, eigvec = np.linalg.eigh(jac_s.T @ jac_s)
     eigval = np.maximum(eigval, 1e-14 * max(float(eigval.max()), 1e-300))
     cov = (eigvec / eigval) @ eigvec.T * scale * np.outer(typical, typical)
@@ -318,6 +349,14 @@ def fit(
             pred = pred - np.sum(ww * (pred - y[c])) / np.sum(ww)
         predictions[name] = pred
         rms[name] = float(np.sqrt(np.mean((pred - y[c])[valid] ** 2)))
+
+    for name in measurement.derived:  # shown and compared, not fitted
+        if name in measurement.channels and name not in OFFSET_FREE:
+            pred = np.asarray(predict(traj, name, jnp.asarray(measurement.t), speed, contact_time,
+                                      vehicle.wheel_radius, options.solver.output_dt))
+            valid = measurement.valid(name)
+            predictions[name] = pred
+            rms[name] = float(np.sqrt(np.mean((pred - measurement.channels[name])[valid] ** 2)))
 
     names = tuple(p.name for p in free)
     result = FitResult(
@@ -342,6 +381,7 @@ def fit(
         predictions=predictions,
         measurement=measurement,
         model=model,
+        correlation_time=tau,
     )
     result.identified = assess_identifiability(result, channels)
     if not result.converged and result.reduced_chi2 > 100:

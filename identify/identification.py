@@ -65,15 +65,35 @@ def car_geometry_of(vehicle):
     )
 
 
-def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=(), discovery_status="") -> dict:
-    """The result.json content (``docs/interface.md``), NaN-free after ``results.dumps``."""
+def free_parameters(measurement, speed_mps: float | None) -> tuple[tuple, dict[str, str]]:
+    """What the fit moves for this recording, and the collision parameters it holds fixed
+    with the reason: the impact speed when the user gave it; dz_contact when the recording
+    has neither pitch nor height (the force's height shows only there: a sensor recording's
+    X accelerometers say nothing of it), held at V-SIM's 0 m."""
+    from identify.model import base_parameters
+
+    free, held = base_parameters(), {}
+    if speed_mps is not None:
+        free = tuple(p for p in free if p.name != "impact_speed")
+    if not {"z_m", "pitch_rad"} & set(measurement.channels):
+        free = tuple(p for p in free if p.name != "dz_contact")
+        held["dz_contact"] = ("not identified: the recording has no pitch or height channel, and the height of the"
+                              " contact force shows only in the car's pitch and heave; held at V-SIM's 0 m")
+    return free, held
+
+
+def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=(), discovery_status="",
+                    held: dict | None = None) -> dict:
+    """The result.json content (``docs/interface.md``), NaN-free after ``results.dumps``.
+
+    ``held`` maps a collision parameter the fit held fixed to the reason why."""
     from sim import events_ms
 
     params = {}
     for name in COLLISION_PARAMETERS:
         if name not in fr.values:
             params[name] = {"value": float(getattr(fr.params, name)), "unit": _unit(name), "std": None,
-                            "identified": False, "reason": "held fixed, not fitted"}  # fmt: skip
+                            "identified": False, "reason": (held or {}).get(name, "held fixed, not fitted")}  # fmt: skip
             continue
         ok, reason = fr.identified.get(name, (True, ""))
         entry = {"value": fr.values[name], "unit": fr.units[name], "std": fr.std[name], "identified": ok}
@@ -146,6 +166,14 @@ def write_results(out: Path, ident: Identification, default_traj) -> Path:
 
     fr, rec, vehicle = ident.fit, ident.recording, ident.vehicle
     with ResultsFolder(out) as tmp:
+        forces = []
+        if rec.sensor_test is not None and rec.sensor_test.barrier:
+            from identify.force_check import force_check_document
+
+            ident.document["force_check"] = force_check_document(
+                rec.sensor_test, fr.measurement, fr.trajectory, tmp, fr.contact_time,
+                title=f"{vehicle.name}: barrier load cells vs fitted model ({fr.model})")
+            forces = ["force_time.png", "force_crush.png"]
         (tmp / "result.json").write_text(dumps(ident.document))
         if rec.tracks is not None:
             from video.report import tracks_csv, write_report
@@ -164,6 +192,7 @@ def write_results(out: Path, ident: Identification, default_traj) -> Path:
         overlay = plots.plot_overlay(fr, vehicle, rec, tmp / "overlay.png")
         if overlay is not None:
             figures.append(overlay.name)
+        figures += forces
         defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in COLLISION_PARAMETERS}
         (tmp / "report.md").write_text(render_report(ident.document, defaults, figures))
     return out
@@ -235,13 +264,14 @@ def fit(
     rec = load_recording(recording, car_geometry_of(veh), fps=fps, tape_segment_m=tape_segment,
                          speed_mps=speed_mps, progress=video_progress)  # fmt: skip
     say("fitting the collision model (the first run compiles it: ~15 s)")
-    fr = fit_measurement(rec.measurement, veh, options=options, speed_mps=speed_mps, progress=say)
+    free, held = free_parameters(rec.measurement, speed_mps)
+    fr = fit_measurement(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
     status = (
         "discovery of missing physics is not part of this version yet"
         if discover
         else "discovery of missing physics was switched off (--no-discover)"
     )
-    doc = result_document(fr, rec, veh, discoveries=[], discovery_status=status)
+    doc = result_document(fr, rec, veh, discoveries=[], discovery_status=status, held=held)
     ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh)
     if write:
         say(f"writing {out_path}")

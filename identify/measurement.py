@@ -54,6 +54,9 @@ class Measurement:
     source : what the recording was (a file name), for reports.
     events_ms : events seen in the recording (e.g. ``front_wheel_block``), ms after contact.
     notes : things a person should read about the recording.
+    derived : channels computed from another channel of the same recording (a velocity
+        differentiated from ``x_m``, a displacement integrated from ``vx_mps``): shown in
+        plots but not fitted, as their errors are not independent of their source's.
     """
 
     t: np.ndarray
@@ -64,6 +67,7 @@ class Measurement:
     source: str = ""
     events_ms: dict[str, float] = dataclasses.field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    derived: tuple[str, ...] = ()
 
     def __post_init__(self):
         t = np.asarray(self.t, dtype=float)
@@ -109,6 +113,8 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
     ``<name>_sigma`` or ``<stem>_sigma_<unit>`` columns where the video stage wrote them).
 
     A channel without a sigma column gets ``sigma_floor`` in its unit: say so in notes.
+    With both ``x_m`` and ``vx_mps``, the velocity is taken as derived from the displacement
+    (as the video stage derives it) and not fitted.
     """
     path = Path(path)
     try:
@@ -137,4 +143,6 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
             sigma[name] = np.full(len(data), sigma_floor)
             notes.append(f"{name}: no sigma column, {sigma_floor:g} assumed")
         channels[name] = cols[name]
-    return Measurement(t=cols["t_ms"] / 1000.0, channels=channels, sigma=sigma, source=str(path), notes=tuple(notes))
+    derived = ("vx_mps",) if {"x_m", "vx_mps"} <= set(channels) else ()
+    return Measurement(t=cols["t_ms"] / 1000.0, channels=channels, sigma=sigma, source=str(path), notes=tuple(notes),
+                       derived=derived)

@@ -4,7 +4,10 @@ What the path is decides the reader:
 
 - a video file (MP4, AVI, MOV, ...) or a folder of numbered frames: the video stage
   (``video.io.open_film`` -> ``video.track.track_film``);
-- a ``tracks.csv`` written by ``identify track`` (or by hand): read as it is.
+- a ``tracks.csv`` written by ``identify track`` (or by hand): read as it is;
+- a sensor recording, NHTSA's EV5 export or ISO-MME (``identify.recordings``): the
+  vehicle's accelerometers integrated to motion; its barrier load cells stay out of the
+  measurement (they are the independent check of ``identify.force_check``).
 
 The result keeps what the reports need besides the measurement: the tracks of a film
 (scale, contact frame, overlay) and the film itself.
@@ -28,10 +31,11 @@ class Recording:
     """A recording read for fitting.
 
     measurement : the motion the fit uses.
-    kind : "film", "tracks".
+    kind : "film", "tracks", "sensors".
     path : the file or folder given.
     tracks : video.types.Tracks for a film, else None.
     film : the opened video.io.Film for a film (frames for the overlay plots), else None.
+    sensor_test : identify.recordings.SensorTest of a sensor recording, else None.
     """
 
     measurement: Measurement
@@ -39,6 +43,7 @@ class Recording:
     path: Path
     tracks: object = None
     film: object = None
+    sensor_test: object = None
 
 
 def measurement_from_tracks(tracks, source: str) -> Measurement:
@@ -57,6 +62,7 @@ def measurement_from_tracks(tracks, source: str) -> Measurement:
         source=source,
         events_ms=events,
         notes=tuple(tracks.notes),
+        derived=("vx_mps",) if "vx_mps" in channels and "x_m" in channels else (),
     )
 
 
@@ -89,6 +95,12 @@ def load_recording(
         raise UserError(f"{path} does not exist")
     if path.is_file() and path.suffix.lower() == ".csv":
         return Recording(measurement_from_tracks_csv(path), "tracks", path)
+    from identify.recordings import is_recording, measurement_from_test, read_recording
+
+    if is_recording(path):
+        test = read_recording(path, progress=progress)
+        measurement = dataclasses.replace(measurement_from_test(test), derived=("x_m",))
+        return Recording(measurement, "sensors", path, sensor_test=test)
     if path.is_dir() or path.suffix.lower() in VIDEO_SUFFIXES:
         from video.io import open_film
         from video.track import track_film
@@ -98,5 +110,5 @@ def load_recording(
         return Recording(measurement_from_tracks(tracks, str(path)), "film", path, tracks=tracks, film=film)
     raise UserError(
         f"{path}: not a recording this tool reads (a video file {', '.join(sorted(VIDEO_SUFFIXES))},"
-        " a folder of numbered frames, or a tracks.csv)"
+        " a folder of numbered frames, a tracks.csv, an NHTSA .EV5 header or an ISO-MME .mme file)"
     )

@@ -74,6 +74,23 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
             lines.append(f"- **{d['effect']}** ({d['window_ms'][0]:.0f}-{d['window_ms'][1]:.0f} ms): {d['explanation']}")
     else:
         lines.append(f"- {doc.get('discovery_status', 'nothing discovered')}")
+    check = doc.get("force_check")
+    if check:
+        lines += [
+            "",
+            "## Barrier load cells vs the fitted model (an independent check: the fit saw only the motion)",
+            "",
+            f"- peak force: measured {check['peak_measured_N'] / 1e3:.0f} kN at {check['peak_time_measured_ms']:.0f} ms,"
+            f" predicted {check['peak_predicted_N'] / 1e3:.0f} kN at {check['peak_time_predicted_ms']:.0f} ms"
+            f" ({100 * check['peak_error']:+.1f} %)",
+            f"- impulse: measured {check['impulse_measured_Ns'] / 1e3:.2f} kN s, predicted"
+            f" {check['impulse_predicted_Ns'] / 1e3:.2f} kN s ({100 * check['impulse_error']:+.1f} %)",
+            f"- ISO 18571 curve similarity: {check['iso18571']['overall']:.2f} (1 = identical)",
+        ]
+        if "momentum_check" in check:
+            mc = check["momentum_check"]
+            lines.append(f"- the recording's own consistency: barrier impulse vs m * change of velocity"
+                         f" {100 * mc['error']:+.1f} %")
     if doc.get("notes"):
         lines += ["", "## Notes", ""] + [f"- {n}" for n in doc["notes"]]
     lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]

@@ -24,7 +24,7 @@ def events_ms(traj) -> dict[str, float | None]:
       wheels passes 0.5 upwards / downwards afterwards;
     - ``rear_wheel_lift`` / ``rear_wheel_touchdown``: the rear axle's contact margin turns
       negative / positive again (the first lift and the landing that follows);
-    - ``compression_end``: the crush reaches its maximum (parabolic interpolation);
+    - ``compression_end``: the crush reaches its maximum (the crush rate's zero, interpolated);
     - ``separation``: the contact force falls to zero after the maximum crush.
     """
     t = np.asarray(traj.t, dtype=float)
@@ -43,10 +43,18 @@ def events_ms(traj) -> dict[str, float | None]:
     crush = np.asarray(traj.crush, dtype=float)
     i = int(np.argmax(crush))
     if 0 < i < len(t) - 1:
-        y0, y1, y2 = crush[i - 1 : i + 2]
-        den = y0 - 2 * y1 + y2
-        shift = 0.5 * (y0 - y2) / den if den != 0 else 0.0
-        out["compression_end"] = float((t[i] + shift * (t[1] - t[0])) * 1e3)
+        # The crush rate falls to zero at the maximum: the CG's velocity, sampled, plus the
+        # rate of the smooth pitch part of the crush (crush - x = dz' sin(pitch)), by
+        # central differences. The contact force drops when the crush turns (the unloading
+        # curve starts below the loading curve), so the rate has a kink at its zero:
+        # extrapolate the last two loading samples linearly, not across the kink.
+        lever = crush - np.asarray(traj.x, dtype=float)
+        rate = np.asarray(traj.vx, dtype=float) + np.gradient(lever, t)
+        k = i if rate[i] > 0 else i - 1  # last loading sample
+        dt = t[1] - t[0]
+        slope = (rate[k] - rate[k - 1]) / dt if k > 0 else 0.0
+        step = -rate[k] / slope if slope < 0 else 0.5 * dt
+        out["compression_end"] = float((t[k] + min(max(step, 0.0), dt)) * 1e3)
     else:
         out["compression_end"] = None
 

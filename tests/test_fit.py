@@ -69,3 +69,37 @@ def test_force_height_not_identified_from_compression_alone_without_pitch(a4, pa
     assert r.identified["k_compression"][0]
     ok, reason = r.identified["dz_contact"]
     assert not ok and "no pitch or height channel" in reason, reason
+
+
+def test_autocorrelation_time_is_one_for_white_noise_and_grows_with_correlation():
+    from identify.fitting import integrated_autocorrelation_time
+
+    rng = np.random.default_rng(3)
+    white = rng.normal(size=2000)
+    assert integrated_autocorrelation_time(white) == pytest.approx(1.0, abs=0.3)
+    ar = np.zeros(2000)
+    for i in range(1, 2000):  # AR(1), rho = 0.8: tau = (1 + rho) / (1 - rho) = 9
+        ar[i] = 0.8 * ar[i - 1] + white[i]
+    assert integrated_autocorrelation_time(ar) == pytest.approx(9.0, rel=0.3)
+
+
+def test_correlated_tracking_errors_widen_the_intervals(a4, paper_measurement, paper_fit):
+    # The same measurement with its x noise replaced by a slowly wandering error of the same
+    # size: n correlated samples are worth fewer independent ones, and the fit must say so.
+    m = paper_measurement
+    rng = np.random.default_rng(5)
+    e = np.zeros(len(m.t))
+    for i in range(1, len(e)):
+        e[i] = 0.9 * e[i - 1] + rng.normal(0.0, 0.002 * np.sqrt(1 - 0.81))
+    wandering = dataclasses.replace(m, channels={**m.channels, "x_m": m.channels["x_m"] - _white_part(m) + e})
+    r = fit(wandering, a4)
+    assert r.correlation_time["x_m"] > 5 and paper_fit.correlation_time["x_m"] < 1.5
+    assert r.std["k_compression"] > 1.5 * paper_fit.std["k_compression"]
+
+
+def _white_part(m):
+    """The Gaussian noise synthetic_measurement added to x_m (its first draw with seed 0)."""
+    from helpers import NOISE
+
+    rng = np.random.default_rng(0)
+    return rng.normal(0.0, NOISE["x_m"], len(m.t))

@@ -14,11 +14,12 @@ from identify.errors import UserError
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "fit",
-        help="identify the collision parameters from a crash-test film (or tracks.csv)",
-        description="Track the car in a crash-test film, fit the collision model to its motion and write "
-        "result.json, tracks.csv, plots and report.md to a results folder.",
+        help="identify the collision parameters from a crash-test film or sensor recording",
+        description="Track the car in a crash-test film (or read an NHTSA EV5 / ISO-MME sensor recording), "
+        "fit the collision model to its motion and write result.json, tracks.csv, plots and report.md to a "
+        "results folder. With barrier load cells, the fitted model's force is checked against them.",
     )
-    p.add_argument("recording", type=Path, metavar="VIDEO", help="video file, folder of numbered frames, or tracks.csv")
+    p.add_argument("recording", type=Path, metavar="VIDEO", help="video file, folder of numbered frames, tracks.csv, NHTSA .EV5 header or ISO-MME .mme")
     p.add_argument("--vehicle", required=True, help="vehicle name (see 'identify vehicles') or path to a .toml")
     p.add_argument("--fps", type=float, default=None, help="true recording rate if the container's is wrong")
     p.add_argument("--tape-segment", type=float, default=0.1, help="reference-tape segment length, m (default 0.1)")

@@ -1,0 +1,64 @@
+"""The README's main command and the sensor-recording fit, end to end (slow: they run the
+video stage or the EV5 reader, the fit with its compile, and write a results folder)."""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import SAMPLE_FILM
+from identify.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.slow
+def test_sample_film_gives_the_parameters_it_was_made_with(sample_results):
+    from sim import named_params
+
+    truth_doc = json.loads(SAMPLE_FILM.with_suffix(".truth.json").read_text())
+    truth = named_params(truth_doc["params"])
+    doc = json.loads((sample_results / "result.json").read_text())
+    p = doc["parameters"]
+    tolerance = {"k_compression": ("rel", 0.03), "k_restitution": ("rel", 0.03),
+                 "restitution": ("abs", 0.02), "dz_contact": ("abs", 0.03)}  # fmt: skip
+    for name, (kind, tol) in tolerance.items():
+        true = float(getattr(truth, name))
+        err = p[name]["value"] - true
+        assert abs(err) <= (tol * abs(true) if kind == "rel" else tol), (name, p[name]["value"], true)
+        assert abs(err) <= 2 * p[name]["std"], (name, err, p[name]["std"])
+        assert p[name]["identified"] is True
+    assert doc["impact_speed_kmh"] == pytest.approx(truth_doc["impact_speed_kmh"], rel=0.005)
+    # Fit RMS at the level of the tracking noise: the tracker's own x sigma.
+    with open(sample_results / "tracks.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    x_sigma = np.median([float(r["x_sigma_m"]) for r in rows])
+    assert doc["fit"]["rms_m"] < 2.0 * x_sigma
+    for name in ("tracks.csv", "displacement_velocity.png", "residuals.png", "silhouettes.png", "overlay.png",
+                 "report.md"):
+        assert (sample_results / name).stat().st_size > 100, name
+
+
+@pytest.mark.slow
+def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp_path):
+    out = tmp_path / "v10146.identify"
+    ev5 = ROOT / "data" / "nhtsa-10146" / "v10146.EV5"
+    assert main(["fit", str(ev5), "--vehicle", "toyota_camry_2018", "--out", str(out), "--quiet"]) == 0
+    doc = json.loads((out / "result.json").read_text())
+    assert doc["recording_kind"] == "sensors" and doc["vehicle"] == "toyota_camry_2018"
+    assert doc["impact_speed_kmh"] == pytest.approx(57.1, abs=0.5)
+    assert doc["parameters"]["dz_contact"]["identified"] is False
+    assert "no pitch or height channel" in doc["parameters"]["dz_contact"]["reason"]
+    check = doc["force_check"]
+    assert check["load_cells"] >= 1 and abs(check["momentum_check"]["error"]) < 0.035
+    for key in ("peak_error", "impulse_error"):
+        assert np.isfinite(check[key])
+    assert 0.0 < check["iso18571"]["overall"] <= 1.0
+    with open(out / "forces.csv", newline="") as f:
+        header = next(csv.reader(f))
+    assert header == ["t_ms", "measured_N", "predicted_N"]
+    for name in ("force_time.png", "force_crush.png"):
+        assert (out / name).stat().st_size > 100
+    assert "force_time.png" in (out / "report.md").read_text()
