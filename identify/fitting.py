@@ -60,8 +60,8 @@ class FitOptions:
 
     starts: int = 5
     max_steps: int = 150
-    rtol: float = 1e-8
-    atol: float = 1e-8
+    rtol: float = 1e-6
+    atol: float = 1e-6
     seed: int = 0
     solver: Solver = Solver()
 
