@@ -412,7 +412,7 @@ def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceCompar
     plt = _figure()
     fig, ax = plt.subplots(figsize=(8, 4.5))
     ax.plot(t_ms, np.asarray(measured_N) / 1e3, color="k", label="measured (barrier load cells, CFC 60)")
-    ax.plot(t_ms, np.asarray(predicted_N) / 1e3, color="tab:red", label="predicted (model)")
+    ax.plot(t_ms, np.asarray(predicted_N) / 1e3, color="tab:red", label="predicted (model, same CFC)")
     ax.set_xlabel("time after first contact (ms)")
     ax.set_ylabel("contact force (kN)")
     if comparison is not None:
@@ -446,8 +446,9 @@ def plot_force_crush(path, crush_measured_m, force_measured_N, crush_predicted_m
 
 def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
                  contact_time_s: float = 0.0, title: str = "") -> ForceComparison:
-    """Compare a simulated trajectory's contact force with the barrier's; write
-    ``forces.csv``, ``force_time.png`` and ``force_crush.png`` into ``out_dir``.
+    """Compare a simulated trajectory's contact force, filtered with the load cells' CFC
+    class, with the barrier's; write ``forces.csv``, ``force_time.png`` and
+    ``force_crush.png`` into ``out_dir``.
 
     Parameters
     ----------
@@ -475,7 +476,12 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
     """
     out = Path(out_dir)
     tp = np.asarray(traj.t, dtype=float) + contact_time_s
-    fp = np.asarray(traj.force, dtype=float)
+    # The model's force through the same CFC filter as the load cells (J211: channels are
+    # compared at the same filter class); its jump where the crush turns is a modelling
+    # idealisation a load cell would not show either.
+    from identify.recordings.motion import filter_cfc
+
+    fp = filter_cfc(np.asarray(traj.force, dtype=float), 1.0 / float(tp[1] - tp[0]), force.cfc)
     comparison = compare_forces(force.t, force.force, tp, fp)
     end_all = min(float(force.t[-1]), float(tp[-1]))
     grid = np.arange(0.0, end_all + 1e-9, 1e-3)
