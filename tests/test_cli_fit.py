@@ -82,3 +82,32 @@ def test_bad_input_is_one_line_and_exit_2(argv, message, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and message in err and len(err.splitlines()) == 1, err
     assert not (tmp_path / "out").exists()
+
+
+def test_vehicle_file_missing_a_field_is_named(tmp_path, capsys):
+    from sim._paths import VEHICLE_DIR
+
+    text = (VEHICLE_DIR / "audi_a4.toml").read_text()
+    broken = "\n".join(line for line in text.splitlines() if not line.startswith("mass"))
+    (tmp_path / "car.toml").write_text(broken)
+    (tmp_path / "notes.txt").write_text("not a film")
+    code = main(["fit", str(tmp_path / "notes.txt"), "--vehicle", str(tmp_path / "car.toml"), "--out",
+                 str(tmp_path / "out"), "--quiet"])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "mass" in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_film_that_ends_before_contact_is_one_clear_error(tmp_path, capsys):
+    # 40 frames of the car approaching at 15 m/s; the film stops before it reaches the barrier.
+    from identify.synthetic import render_crash
+
+    t = np.arange(4) / 1000.0
+    approach = {"t": t, "x": 15.0 * t, "z": 0 * t, "pitch": 0 * t, "crush": 0 * t,
+                "front_wheel_angle": 15.0 * t / 0.32, "rear_wheel_angle": 15.0 * t / 0.32}  # fmt: skip
+    film = tmp_path / "approach.mp4"
+    render_crash("audi_a4", approach, film, frames_before=40, speed=15.0)
+    code = main(["fit", str(film), "--vehicle", "audi_a4", "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "no contact" in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()

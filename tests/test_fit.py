@@ -103,3 +103,12 @@ def _white_part(m):
 
     rng = np.random.default_rng(0)
     return rng.normal(0.0, NOISE["x_m"], len(m.t))
+
+
+def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement):
+    # One Levenberg-Marquardt step from V-SIM's defaults leave the fit far from the data.
+    from identify.errors import UserError
+    from identify.fitting import FitOptions
+
+    with pytest.raises(UserError, match="did not converge"):
+        fit(paper_measurement, a4, options=FitOptions(starts=1, max_steps=1))
