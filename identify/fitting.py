@@ -24,7 +24,7 @@ import optimistix as optx
 
 from identify.errors import UserError
 from identify.measurement import Measurement
-from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict
+from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
 
@@ -143,17 +143,28 @@ def _stack(measurement: Measurement):
     return channels, y, w
 
 
+def _values(spec, u, data):
+    """Physical values of ``spec``: fitted ones from u, held ones (mask 0) from ``data["held"]``.
+
+    The mask and the held values are data, not part of the compiled function: fits that free
+    different subsets of one superset ``spec`` share one compile (discovery's candidates)."""
+    return {
+        p.name: jnp.where(data["mask"][i] > 0, p.to_physical(u[i]), data["held"][i]) for i, p in enumerate(spec)
+    }
+
+
 def _residual_fn(spec, channels, n_out, solver):
     """Build r(u, data) -> (m,) weighted residuals (pure, jit-able)."""
     h = solver.output_dt
 
     def residuals(u, data):
-        values = {p.name: p.to_physical(u[i]) for i, p in enumerate(spec)}
+        values = _values(spec, u, data)
         params, speed, contact_time = assemble(data["template"], values, data["speed_guess"])
-        traj = _run(params, data["vehicle"], speed, n_out, solver)
+        vehicle = vehicle_with(data["vehicle"], values)
+        traj = _run(params, vehicle, speed, n_out, solver)
         out = []
         for c, name in enumerate(channels):
-            pred = predict(traj, name, data["t"], speed, contact_time, data["vehicle"].wheel_radius, h)
+            pred = predict(traj, name, data["t"], speed, contact_time, vehicle.wheel_radius, h)
             w = data["w"][c]
             diff = pred - data["y"][c]
             if name in OFFSET_FREE:
@@ -204,9 +215,9 @@ def _finish(spec, channels, n_out, options, data, u):
     fn = _residual_fn(spec, channels, n_out, options.solver)
     r, jac_u = fn(u, data), jax.jacfwd(fn)(u, data)
     dvalue_du = jnp.stack([jax.grad(p.to_physical)(u[i]) for i, p in enumerate(spec)])
-    values = {p.name: p.to_physical(u[i]) for i, p in enumerate(spec)}
+    values = _values(spec, u, data)
     params, speed, contact_time = assemble(data["template"], values, data["speed_guess"])
-    traj = _run(params, data["vehicle"], speed, n_out, options.solver)
+    traj = _run(params, vehicle_with(data["vehicle"], values), speed, n_out, options.solver)
     h = options.solver.output_dt
     preds = jnp.stack(
         [predict(traj, c, data["t"], speed, contact_time, data["vehicle"].wheel_radius, h) for c in channels]
@@ -217,12 +228,16 @@ def _finish(spec, channels, n_out, options, data, u):
 _finish_jit = jax.jit(_finish, static_argnames=("spec", "channels", "n_out", "options"))
 
 
-def _starting_points(spec, initial: dict, options: FitOptions) -> np.ndarray:
+def _starting_points(spec, initial: dict, options: FitOptions, held: dict | None = None) -> np.ndarray:
     rng = np.random.default_rng(options.seed)
+    held = held or {}
     starts = []
     for k in range(options.starts):
         u = []
         for p in spec:
+            if p.name in held:
+                u.append(0.0)
+                continue
             value = initial[p.name]
             if k > 0 and p.name in START_RANGES:
                 lo, hi = START_RANGES[p.name]
@@ -242,6 +257,8 @@ def fit(
     speed_mps: float | None = None,
     model: str = "base",
     progress=None,
+    held: dict | None = None,
+    require_convergence: bool = True,
 ) -> FitResult:
     """Fit ``free`` parameters of the model to ``measurement``.
 
@@ -256,6 +273,11 @@ def fit(
         sigma enters as a prior, a given one is held fixed.
     model : label of the model in reports ("base", "base+stiffness_zone").
     progress : callable taking a one-line status, or None.
+    held : name -> physical value for names of ``free`` that are held fixed, not fitted
+        (fits freeing different subsets of one ``free`` tuple share one compiled solve;
+        the result reports only the fitted names).
+    require_convergence : raise when the best start did not converge and misfits badly;
+        False returns it (a caller that continues the fit from it decides).
 
     Returns
     -------
@@ -277,6 +299,10 @@ def fit(
         if speed_mps is not None:
             free = tuple(p for p in free if p.name != "impact_speed")
     free = tuple(free)
+    held = dict(held or {})
+    unknown = sorted(set(held) - {p.name for p in free})
+    if unknown:
+        raise ValueError(f"held parameter {unknown[0]!r} is not in free")
     init = {
         **{n: float(getattr(template, n)) for n in ("k_compression", "k_restitution", "restitution", "dz_contact")},
         "impact_speed": speed_guess,
@@ -293,15 +319,20 @@ def fit(
         speed_guess=jnp.asarray(float(speed_guess)),
         speed_prior=jnp.asarray(float(speed_guess)),
         speed_prior_w=jnp.asarray(1.0 / measurement.impact_speed_sigma if measured_prior else 0.0),
+        mask=jnp.asarray([0.0 if p.name in held else 1.0 for p in free]),
+        held=jnp.asarray([float(held.get(p.name, 0.0)) for p in free]),
     )
     duration = float(measurement.t.max()) + 0.002 + 0.010  # room for the contact-time shift
     n_out = int(math.ceil(duration / options.solver.output_dt)) + 2
 
+    # the number of starts and their seed do not change the compiled solve: fits that
+    # differ only in those share it
+    compiled = dataclasses.replace(options, starts=1, seed=0)
     runs = []
-    for k, u0 in enumerate(_starting_points(free, init, options)):
+    for k, u0 in enumerate(_starting_points(free, init, options, held)):
         if progress is not None:
             progress(f"fit: start {k + 1} of {options.starts}")
-        runs.append([np.asarray(a) for a in _solve_jit(free, channels, n_out, options, data, jnp.asarray(u0))])
+        runs.append([np.asarray(a) for a in _solve_jit(free, channels, n_out, compiled, data, jnp.asarray(u0))])
     u_all, costs, ok = (np.stack(a) for a in zip(*runs))
     costs = np.where(np.isfinite(costs), costs, np.inf)
     best = int(np.argmin(costs))
@@ -312,8 +343,11 @@ def fit(
     others = sorted({round(float(c), 6) for c in costs if np.isfinite(c) and c > costs[best] * 1.01 + 1e-6})
 
     u = jnp.asarray(u_all[best])
-    r, jac_u, dvalue_du, traj, preds = _finish_jit(free, channels, n_out, options, data, u)
+    r, jac_u, dvalue_du, traj, preds = _finish_jit(free, channels, n_out, compiled, data, u)
     r, jac_u, dvalue_du, preds = (np.asarray(a) for a in (r, jac_u, dvalue_du, preds))
+    fitted = [i for i, p in enumerate(free) if p.name not in held]
+    jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
+    spec_all, free = free, tuple(free[i] for i in fitted)
     n_res = int(np.sum(w > 0)) + (1 if measured_prior else 0)
     chi2 = float(r @ r)
     dof = max(n_res - len(free), 1)
@@ -338,8 +372,9 @@ def fit(
         corr = cov / np.outer(std, std)
     corr = np.nan_to_num(corr)
 
-    values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(free)}
-    params, speed, contact_time = assemble(template, {k: jnp.asarray(v) for k, v in values.items()}, float(speed_guess))
+    values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
+    every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}
+    params, speed, contact_time = assemble(template, every, float(speed_guess))
 
     predictions, rms = {}, {}
     for c, name in enumerate(channels):
@@ -384,7 +419,7 @@ def fit(
         correlation_time=tau,
     )
     result.identified = assess_identifiability(result, channels)
-    if not result.converged and result.reduced_chi2 > 100:
+    if require_convergence and not result.converged and result.reduced_chi2 > 100:
         raise UserError(
             f"{measurement.source}: the fit did not converge (reduced chi-square {result.reduced_chi2:.3g} after"
             f" {options.max_steps} steps); check the vehicle, the speed and the tracks"

@@ -27,6 +27,7 @@ class Identification:
     recording : identify.recording.Recording (the measurement, and a film's tracks).
     vehicle : sim.Vehicle.
     out : the results folder, or None when nothing was written.
+    discovery : identify.discovery.DiscoveryResult, or None with ``discover=False``.
     """
 
     document: dict
@@ -34,6 +35,7 @@ class Identification:
     recording: Recording
     vehicle: object
     out: Path | None = None
+    discovery: object = None
 
     @property
     def parameters(self) -> dict:
@@ -46,6 +48,15 @@ def default_output_folder(recording_path: Path) -> Path:
     p = Path(recording_path)
     stem = p.name if p.is_dir() else p.stem
     return p.parent / f"{stem}.identify"
+
+
+def vehicle_reference(name_or_path) -> str:
+    """What loads this vehicle again: its name when it is one of ``data/vehicles/``, else
+    the absolute path of its file."""
+    from sim.vehicle import VEHICLE_DIR, vehicle_path
+
+    path = vehicle_path(name_or_path).resolve()
+    return path.stem if path == (VEHICLE_DIR / path.name).resolve() else str(path)
 
 
 def car_geometry_of(vehicle):
@@ -83,10 +94,12 @@ def free_parameters(measurement, speed_mps: float | None) -> tuple[tuple, dict[s
 
 
 def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=(), discovery_status="",
-                    held: dict | None = None) -> dict:
+                    held: dict | None = None, vehicle_ref: str | None = None) -> dict:
     """The result.json content (``docs/interface.md``), NaN-free after ``results.dumps``.
 
-    ``held`` maps a collision parameter the fit held fixed to the reason why."""
+    ``held`` maps a collision parameter the fit held fixed to the reason why;
+    ``vehicle_ref`` is what ``--vehicle`` must be given to load the vehicle again (its name,
+    or the path of a file outside ``data/vehicles/``; default the name)."""
     from sim import events_ms
 
     params = {}
@@ -100,15 +113,13 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         if not ok:
             entry["reason"] = reason
         params[name] = entry
-    for mech in fr.params.mechanisms:
-        for pname, (value, unit) in mech.parameter_values().items():
-            key = f"{mech.effect}.{pname}"
-            if key in fr.values:
-                params[key] = {"value": fr.values[key], "unit": unit, "std": fr.std[key], "identified": True}
+    for key in fr.names:  # a discovered mechanism's parameters: "stiffness_zone.depth"
+        if "." in key:
+            params[key] = {"value": fr.values[key], "unit": fr.units[key], "std": fr.std[key], "identified": True}
     model_events = {k: (v + fr.contact_time * 1e3 if v is not None else None) for k, v in events_ms(fr.trajectory).items()}
     tracks = recording.tracks
     doc = {
-        "vehicle": vehicle.key,
+        "vehicle": vehicle_ref or vehicle.key,
         "vehicle_name": vehicle.name,
         "recording": str(recording.path),
         "recording_kind": recording.kind,
@@ -136,6 +147,9 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             "starts": fr.starts,
             "starts_at_best": fr.starts_at_best,
             "other_minima_cost": fr.other_minima,
+            "fitted_channels": [c for c in fr.rms if c not in fr.measurement.derived],
+            "derived_channels": [c for c in fr.rms if c in fr.measurement.derived],
+            "correlation_time_samples": dict(fr.correlation_time),  # integrated autocorrelation time of each residual
         },
         "discoveries": list(discoveries),
         "discovery_status": discovery_status,
@@ -192,10 +206,25 @@ def write_results(out: Path, ident: Identification, default_traj) -> Path:
         overlay = plots.plot_overlay(fr, vehicle, rec, tmp / "overlay.png")
         if overlay is not None:
             figures.append(overlay.name)
+        if ident.discovery is not None:
+            from identify.discovery_plots import plot_discovery
+
+            figures += plot_discovery(ident.discovery, tmp, vehicle)
         figures += forces
+        (tmp / "predictions.csv").write_text(_predictions_csv(fr))
         defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in COLLISION_PARAMETERS}
         (tmp / "report.md").write_text(render_report(ident.document, defaults, figures))
     return out
+
+
+def _predictions_csv(fr: FitResult) -> str:
+    """The fitted model on the measurement's clock: ``t_ms`` (0 = measured first contact)
+    and one column per channel (SI units, offsets removed as the fit removes them)."""
+    names = list(fr.predictions)
+    cols = [np.asarray(fr.measurement.t) * 1e3] + [np.asarray(fr.predictions[n], float) for n in names]
+    rows = [",".join(["t_ms"] + names)]
+    rows += [",".join("nan" if not np.isfinite(v) else f"{v:.9g}" for v in row) for row in zip(*cols)]
+    return "\n".join(rows) + "\n"
 
 
 def _measurement_csv(m) -> str:
@@ -263,16 +292,27 @@ def fit(
     say(f"reading {recording}")
     rec = load_recording(recording, car_geometry_of(veh), fps=fps, tape_segment_m=tape_segment,
                          speed_mps=speed_mps, progress=video_progress)  # fmt: skip
-    say("fitting the collision model (the first run compiles it: ~15 s)")
     free, held = free_parameters(rec.measurement, speed_mps)
-    fr = fit_measurement(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
-    status = (
-        "discovery of missing physics is not part of this version yet"
-        if discover
-        else "discovery of missing physics was switched off (--no-discover)"
-    )
-    doc = result_document(fr, rec, veh, discoveries=[], discovery_status=status, held=held)
-    ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh)
+    found = None
+    if discover:
+        from identify.discovery import CANDIDATE_FIT, discover as discover_missing, fit_base
+
+        say("fitting the collision model (the first run compiles it: ~20 s)")
+        base_options = dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver)
+        base = fit_base(rec.measurement, veh, free=free, options=base_options, speed_mps=speed_mps, progress=say)
+        say(f"base model: x RMS {base.rms_m * 1e3:.2f} mm; looking for physics it left out")
+        found = discover_missing(rec.measurement, veh, base, progress=say)
+        fr, discoveries, status = found.final, found.discoveries, found.status
+        say(f"discovery: {status}")
+    else:
+        say("fitting the collision model (the first run compiles it: ~15 s)")
+        fr = fit_measurement(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
+        discoveries, status = [], "discovery of missing physics was switched off (--no-discover)"
+    doc = result_document(fr, rec, veh, discoveries=discoveries, discovery_status=status, held=held,
+                          vehicle_ref=vehicle_reference(vehicle))
+    if found is not None:  # every candidate tried, round by round, and why it was not accepted
+        doc["discovery_rounds"] = [[trial.as_dict() for trial in r] for r in found.rounds]
+    ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh, discovery=found)
     if write:
         say(f"writing {out_path}")
         default_traj = simulate(named_params("vsim_default"), veh, fr.speed, duration=float(fr.measurement.t.max()) + 0.001)

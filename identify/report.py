@@ -69,11 +69,15 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
             rec, mod = events.get(key), model_events.get(key)
             lines.append(f"| {key} | {_fmt(rec, 1.0, 4)} | {_fmt(mod, 1.0, 4)} |")
     lines += ["", "## Missing physics", ""]
-    if doc.get("discoveries"):
-        for d in doc["discoveries"]:
-            lines.append(f"- **{d['effect']}** ({d['window_ms'][0]:.0f}-{d['window_ms'][1]:.0f} ms): {d['explanation']}")
-    else:
-        lines.append(f"- {doc.get('discovery_status', 'nothing discovered')}")
+    lines.append(doc.get("discovery_status", "nothing discovered"))
+    for d in doc.get("discoveries") or []:
+        fitted = ", ".join(f"{k} {_fmt(v['value'], 1.0, 4)} +- {_fmt(v['std'], 1.0, 2)} {v['unit']}"
+                           for k, v in d.get("parameters", {}).items() if isinstance(v, dict) and "value" in v)
+        lines += ["", f"- **{d['effect']}** ({d['window_ms'][0]:.0f}-{d['window_ms'][1]:.0f} ms"
+                  + (f", {d['phase']}" if d.get("phase") else "") + f"): {d['explanation']}"]
+        if fitted:
+            lines.append(f"  {fitted}")
+        lines.append(f"  x RMS {d['rms_before_m'] * 1e3:.2f} -> {d['rms_after_m'] * 1e3:.2f} mm")
     check = doc.get("force_check")
     if check:
         lines += [

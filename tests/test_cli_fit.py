@@ -55,6 +55,31 @@ def test_results_folder_holds_tracks_plots_and_report(fitted_folder):
     assert not list(fitted_folder.parent.glob(".crash.identify.*")), "no temporary folder left behind"
 
 
+def test_predictions_csv_holds_the_fitted_model_on_the_tracks_clock(fitted_folder):
+    doc = json.loads((fitted_folder / "result.json").read_text())
+    pred = np.genfromtxt(fitted_folder / "predictions.csv", delimiter=",", names=True)
+    tracks = np.genfromtxt(fitted_folder / "tracks.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(pred["t_ms"], tracks["t_ms"], atol=1e-6)
+    assert doc["fit"]["fitted_channels"] and set(doc["fit"]["fitted_channels"]) <= set(pred.dtype.names)
+    for c in doc["fit"]["fitted_channels"]:  # the RMS of measured - predicted is result.json's
+        ok = np.isfinite(tracks[c]) & np.isfinite(pred[c])
+        r = tracks[c][ok] - pred[c][ok]
+        assert np.sqrt(np.mean(r**2)) == pytest.approx(doc["fit"]["rms_by_channel"][c], rel=1e-3), c
+    assert set(doc["fit"]["correlation_time_samples"]) >= set(doc["fit"]["fitted_channels"])
+
+
+def test_vehicle_in_result_is_what_loads_it_again(tmp_path):
+    from identify.identification import vehicle_reference
+    from sim.vehicle import VEHICLE_DIR, load_vehicle
+
+    own = tmp_path / "my_car.toml"
+    own.write_text((VEHICLE_DIR / "audi_a4.toml").read_text())
+    assert vehicle_reference("audi_a4") == "audi_a4"
+    assert vehicle_reference(VEHICLE_DIR / "audi_a4.toml") == "audi_a4"
+    assert vehicle_reference(own) == str(own.resolve())
+    assert load_vehicle(vehicle_reference(own)).key == "my_car"
+
+
 def test_refuses_a_folder_that_is_not_a_results_folder(tmp_path, capsys):
     mine = tmp_path / "mine"
     mine.mkdir()

@@ -212,3 +212,26 @@ def test_a_users_folder_is_never_overwritten(tmp_path, capsys):
     code, err = run_bad(["--vehicle", "audi_a4", "--params", "paper_identified", "--out", str(out), *FAST], capsys)
     assert code == 2 and "not a sensitivity folder" in err
     assert (out / "notes.txt").read_text() == "keep me"
+
+
+def test_discovered_mechanisms_and_vehicle_changes_are_rebuilt(tmp_path):
+    """A result with a discovered rear-axle stiffness and a stiffness zone: the study's
+    vehicle and parameters are the discovered model's, not the base one's."""
+    from identify.commands.sensitivity import load_result
+    from sim import load_vehicle
+
+    folder = write_result(tmp_path / "r")
+    doc = json.loads((folder / "result.json").read_text())
+    doc["parameters"]["rear_axle_lift.rear_axle_stiffness"] = {"value": 12345.0, "unit": "N/m", "std": 100.0}
+    doc["parameters"]["stiffness_zone.depth"] = {"value": 0.4, "unit": "m", "std": 0.01}
+    doc["parameters"]["stiffness_zone.k_zone"] = {"value": 2.5e6, "unit": "N/m^3", "std": 1e5}
+    doc["discoveries"].append({"effect": "rear_axle_lift", "window_ms": [38.0, 300.0], "parameters": {}})
+    (folder / "result.json").write_text(json.dumps(doc))
+    notes = []
+    vehicle, params, speed, *_ = load_result(folder, None, notes)
+    base = load_vehicle("audi_a4")
+    assert float(vehicle.axle_stiffness[1]) == 12345.0 and float(vehicle.axle_stiffness[0]) == float(base.axle_stiffness[0])
+    zone = {m.effect: m for m in params.mechanisms}["stiffness_zone"]
+    assert float(zone.depth) == 0.4 and float(zone.k_zone) == 2.5e6
+    assert not any("rear_axle_lift" in n and "left out" in n for n in notes), notes
+    assert speed == pytest.approx(56.3 / 3.6)

@@ -37,8 +37,12 @@ def test_sample_film_gives_the_parameters_it_was_made_with(sample_results):
     x_sigma = np.median([float(r["x_sigma_m"]) for r in rows])
     assert doc["fit"]["rms_m"] < 2.0 * x_sigma
     for name in ("tracks.csv", "displacement_velocity.png", "residuals.png", "silhouettes.png", "overlay.png",
-                 "report.md"):
+                 "discovery_residuals.png", "discovery_force_deflection.png", "report.md"):
         assert (sample_results / name).stat().st_size > 100, name
+    # nothing is hidden in the sample film: discovery tries the candidates and accepts none
+    assert doc["discoveries"] == [] and doc["fit"]["model"] == "base"
+    assert not any(t["accepted"] for r in doc["discovery_rounds"] for t in r)
+    assert doc["discovery_status"].startswith("no missing physics")
 
 
 @pytest.mark.slow
@@ -62,3 +66,7 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     for name in ("force_time.png", "force_crush.png"):
         assert (out / name).stat().st_size > 100
     assert "force_time.png" in (out / "report.md").read_text()
+    # discovery ran on the motion: every candidate tried is listed with its verdict
+    tried = {t["effect"] for r in doc["discovery_rounds"] for t in r}
+    assert tried == {"front_wheel_block", "stiffness_zone", "progressive_stiffness", "rate_dependence", "rear_axle_lift"}
+    assert all(t["accepted"] or t["reason"] for r in doc["discovery_rounds"] for t in r)

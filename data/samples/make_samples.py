@@ -1,6 +1,6 @@
 """Regenerate the sample films in this folder (deterministic: fixed seeds).
 
-    /work/venv/bin/python data/samples/make_samples.py
+    python data/samples/make_samples.py
 
 ``a4_paper.mp4``: Audi A4 (data/vehicles/audi_a4.toml) into a rigid barrier at 56.3 km/h,
 simulated with the ``paper_identified`` parameters (``sim``), 30 frames of approach at

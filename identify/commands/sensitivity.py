@@ -133,8 +133,13 @@ def _mechanisms_from_result(doc, notes):
         value = entry.get("value") if isinstance(entry, dict) else entry
         if dot and effect in MECHANISMS and isinstance(value, (int, float)) and not isinstance(value, bool):
             fields.setdefault(effect, {})[field] = jnp.asarray(float(value))
+    from identify.model import VEHICLE_OVERRIDES
+
+    vehicle_effects = {name.split(".", 1)[0] for name in VEHICLE_OVERRIDES}  # applied to the vehicle instead
     for disc in doc.get("discoveries") or []:
         effect = disc.get("effect") if isinstance(disc, dict) else disc
+        if effect in vehicle_effects:
+            continue
         if effect not in MECHANISMS:
             notes.append(f"discovered effect {effect!r} has no simulation mechanism: left out of the study")
             continue
@@ -154,6 +159,22 @@ def _mechanisms_from_result(doc, notes):
         except (TypeError, ValueError) as err:
             notes.append(f"effect {effect!r} left out: its parameters {sorted(values)} do not build the mechanism ({err})")
     return tuple(out)
+
+
+def _vehicle_overrides(table) -> dict:
+    """The fitted values of discovered vehicle changes (``rear_axle_lift.rear_axle_stiffness``)
+    in a result.json's ``"parameters"``."""
+    import jax.numpy as jnp
+
+    from identify.model import VEHICLE_OVERRIDES
+
+    out = {}
+    for name in VEHICLE_OVERRIDES:
+        entry = table.get(name)
+        value = entry.get("value") if isinstance(entry, dict) else entry
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
+            out[name] = jnp.asarray(float(value))
+    return out
 
 
 def load_result(result_dir: Path, speed_kmh, notes):
@@ -193,6 +214,12 @@ def load_result(result_dir: Path, speed_kmh, notes):
         std = entry.get("std") if isinstance(entry, dict) else None
         if isinstance(std, (int, float)) and math.isfinite(std) and std > 0:
             stds[name] = float(std)
+    overrides = _vehicle_overrides(table)
+    if overrides:
+        from identify.model import vehicle_with
+
+        vehicle = vehicle_with(vehicle, overrides)
+        notes.append("vehicle changed as discovered: " + ", ".join(f"{k} = {v:.6g}" for k, v in overrides.items()))
     try:
         params = make_params(mechanisms=_mechanisms_from_result(doc, notes), **values)
     except ConfigError as err:

@@ -1,0 +1,481 @@
+"""Discovery of missing physics: find where the fitted model and the recording part, name
+the mechanism that was left out, add it, refit, and repeat.
+
+    from identify.discovery import discover, plot_discovery
+    result = discover(measurement, vehicle, base_fit)        # base_fit: identify.fitting.fit(...)
+    plot_discovery(result, out_dir)                          # PNG file names
+    result.discoveries     # result.json's "discoveries" (docs/interface.md)
+    result.final           # FitResult of the model with every accepted mechanism
+    result.status          # "no missing physics: ..." / "2 effects found" ...
+
+The loop (one round per effect):
+
+1. residual analysis of the current fit (``identify.residuals``): per channel, a
+   whiteness test and the windows (time, phase, crush) where the residual stops looking
+   like measurement noise;
+2. every candidate of ``identify.candidates`` not yet accepted is fitted together with the
+   base parameters and the mechanisms accepted so far. All candidate fits run through one
+   compiled solve (a superset model with every mechanism, unused ones held at values that
+   switch them off);
+3. the best candidate by the Bayesian information criterion BIC = chi2 + k ln n (chi2 and
+   n divided by each channel's autocorrelation time, so that correlated tracking errors
+   do not count as independent evidence) is accepted only when it lowers the BIC by at
+   least ``min_bic_gain``, its mechanism is active inside the recorded crash (a depth the
+   crush reaches) and it predicts held-out parts of the recording better than the current
+   model (two-fold block cross-validation: fit on alternate ``cv_block_ms`` blocks,
+   predict the others);
+4. the loop stops when the residuals are noise or no candidate is justified. Misfit that
+   remains is estimated as a missing force (``identify.missing_force``) and reported as
+   ``unexplained`` with its window and a description of its shape, when that force is
+   itself justified by the BIC.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from identify.candidates import (
+    BY_EFFECT,
+    CANDIDATES,
+    accepted_mechanisms,
+    held_for,
+    starting_guesses,
+    superset_spec,
+    superset_template,
+)
+from identify.errors import UserError
+from identify.fitting import FitOptions, FitResult, fit
+from identify.residuals import ResidualAnalysis, analyse, channel_chi2, model_crush, phase_at
+
+
+# Candidate fits start next to the answer (the current fit's values): a looser tolerance
+# and fewer steps than the base fit's random starts need keep each to about a second.
+CANDIDATE_FIT = FitOptions(starts=1, max_steps=40, rtol=1e-5, atol=1e-5)
+
+
+@dataclasses.dataclass(frozen=True)
+class DiscoveryOptions:
+    """Settings of the discovery loop.
+
+    max_effects : most mechanisms accepted (rounds of the loop).
+    continuations : times a candidate fit that hit the step limit is continued.
+    min_bic_gain : smallest BIC decrease that justifies a candidate (10: "very strong"
+        evidence on Kass and Raftery's scale).
+    cv_block_ms : ms, length of the alternating blocks of the held-out check.
+    window_ms, threshold : residual analysis (``identify.residuals.analyse``).
+    fit : options of the candidate fits (one start each from the current fit's values
+        and the candidate's starting guesses); fits whose options differ only in
+        ``starts`` and ``seed`` share one compile (:func:`fit_base` uses these).
+    """
+
+    max_effects: int = 3
+    continuations: int = 3
+    min_bic_gain: float = 10.0
+    cv_block_ms: float = 20.0
+    window_ms: float = 15.0
+    threshold: float = 4.0
+    fit: FitOptions = CANDIDATE_FIT
+
+
+@dataclasses.dataclass(frozen=True)
+class Trial:
+    """One candidate tried in one round: its fit's chi2 (tau-scaled), BIC change against
+    the current model (negative: better), held-out chi2 gain (positive: better; None when
+    not checked), fitted values of its own parameters, accepted and why not."""
+
+    effect: str
+    chi2: float
+    delta_bic: float
+    cv_gain: float | None
+    values: dict[str, float]
+    accepted: bool
+    reason: str
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass
+class DiscoveryResult:
+    """Outcome of :func:`discover`.
+
+    discoveries : list of dicts shaped as result.json's "discoveries".
+    final : FitResult of the base model plus every accepted mechanism.
+    start : FitResult of the base model refitted in the superset model (the "before").
+    status : one line for people.
+    before, after : residual analyses of ``start`` and ``final``.
+    rounds : per round, the candidates tried (list of :class:`Trial`).
+    missing : the estimated missing force (``identify.missing_force.MissingForce``) when
+        misfit remained, else None.
+    """
+
+    discoveries: list[dict]
+    final: FitResult
+    start: FitResult
+    status: str
+    before: ResidualAnalysis
+    after: ResidualAnalysis
+    rounds: list[list[Trial]]
+    missing: object = None
+
+    @property
+    def effects(self) -> list[str]:
+        return [d["effect"] for d in self.discoveries]
+
+
+def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.replace(CANDIDATE_FIT, starts=5),
+             speed_mps=None, progress=None) -> FitResult:
+    """The base model's fit (as ``identify.fitting.fit``) run through discovery's superset
+    model with every candidate mechanism switched off: the same answer, and
+    :func:`discover` then reuses its compiled solve instead of compiling its own (~20 s).
+    The default options are the candidate fits' (tolerance 1e-5, 40 steps a start) with
+    five starts.
+
+    ``free``: the base parameters to fit (default: all six; see
+    ``identify.model.base_parameters``); the result holds no mechanisms."""
+    from identify.model import base_parameters
+    from sim import make_params
+
+    names = [p.name for p in (free if free is not None else base_parameters())]
+    if speed_mps is not None and "impact_speed" in names:
+        names.remove("impact_speed")
+    template = make_params(k_compression=730e3, k_restitution=730e3, restitution=0.2, dz_contact=0.0)
+    kwargs = dict(template=superset_template(template), free=superset_spec(names), speed_mps=speed_mps,
+                  held=held_for((), vehicle))
+    fr = fit(measurement, vehicle, options=options, progress=progress, require_convergence=False, **kwargs)
+    for _ in range(5):  # continue the best start while the step limit stopped it
+        if fr.converged:
+            break
+        fr = fit(measurement, vehicle, initial=dict(fr.values), options=dataclasses.replace(options, starts=1),
+                 require_convergence=False, **kwargs)
+    if not fr.converged and fr.reduced_chi2 > 100:
+        raise UserError(
+            f"{measurement.source}: the fit did not converge (reduced chi-square {fr.reduced_chi2:.3g});"
+            " check the vehicle, the speed and the tracks"
+        )
+    return _final(fr, ())
+
+
+def plot_discovery(result: "DiscoveryResult", out_dir, vehicle=None) -> list[str]:
+    """Residuals before/after with each discovery's window, and the implied force-deflection
+    curve against the model's (``identify.discovery_plots``); returns the PNG file names."""
+    from identify.discovery_plots import plot_discovery as _plot
+
+    return _plot(result, out_dir, vehicle)
+
+
+def _tau(fr: FitResult) -> dict[str, float]:
+    return {c: max(1.0, float(v)) for c, v in fr.correlation_time.items()}
+
+
+def bic(fr: FitResult, tau: dict[str, float]) -> float:
+    """chi2 + k ln n, with each channel's chi2 and sample count divided by its tau."""
+    chi2 = channel_chi2(fr, tau)
+    m = fr.measurement
+    n = sum(int(m.valid(c).sum()) / tau.get(c, 1.0) for c in chi2)
+    return float(sum(chi2.values()) + len(fr.names) * math.log(max(n, 2.0)))
+
+
+def _cv_folds(measurement, block_ms: float):
+    """Two measurements of the same shape, each with alternate blocks after contact
+    unmeasured (sigma NaN), and the boolean masks of the samples each leaves out."""
+    t_ms = np.asarray(measurement.t) * 1e3
+    block = np.floor(t_ms / block_ms).astype(int)
+    out = []
+    for fold in (0, 1):
+        left_out = (t_ms >= 0) & (block % 2 == fold)
+        sigma = {c: np.where(left_out, np.nan, s) for c, s in measurement.sigma.items()}
+        out.append((dataclasses.replace(measurement, sigma=sigma), left_out))
+    return out
+
+
+def _held_out_chi2(fits, folds, measurement, tau) -> float:
+    """Sum over folds of the left-out samples' squared normalised prediction errors."""
+    total = 0.0
+    for fr, (_, left_out) in zip(fits, folds):
+        for c, pred in fr.predictions.items():
+            if c not in measurement.channels or c in measurement.derived:
+                continue
+            ok = left_out & measurement.valid(c)
+            z = (np.asarray(measurement.channels[c])[ok] - np.asarray(pred)[ok]) / np.asarray(measurement.sigma[c])[ok]
+            total += float(z @ z) / tau.get(c, 1.0)
+    return total
+
+
+def effect_window_ms(fr: FitResult, effect: str) -> tuple[float, float] | None:
+    """ms after first contact (measurement clock) where the accepted effect acts in the
+    fitted model: the front wheels blocked, the rear wheels off the ground, or the loading
+    force differing from the base law by more than 2 % of the mechanism's largest
+    contribution (clipped to the recording)."""
+    import jax.numpy as jnp
+
+    tr = fr.trajectory
+    t = np.asarray(tr.t) * 1e3 + fr.contact_time * 1e3
+    if effect == "front_wheel_block":
+        active = np.asarray(tr.front_blocked) > 0.5
+    elif effect == "rear_axle_lift":
+        active = np.asarray(tr.rear_margin) < 0.0
+    else:
+        mech = next(m for m in fr.params.mechanisms if m.effect == effect)
+        crush = np.asarray(tr.crush)
+        rate = np.gradient(crush, np.asarray(tr.t))
+        loading = (crush >= np.asarray(tr.crush_max) - 1e-9) & (rate > 0)
+        f0 = float(fr.params.k_compression) * crush  # N/m^2: the base law per unit contact area
+        extra = np.asarray(mech.loading_force(jnp.asarray(f0), jnp.asarray(crush), jnp.asarray(rate),
+                                              fr.params, _UnitArea())) - f0
+        extra = np.where(loading, np.abs(extra), 0.0)
+        active = extra > 0.02 * extra.max() if extra.max() > 0 else np.zeros_like(extra, bool)
+    active &= t <= float(np.max(fr.measurement.t)) * 1e3  # the model runs a little past the recording
+    if not active.any():
+        return None
+    idx = np.flatnonzero(active)
+    return round(float(t[idx[0]]), 1), round(float(t[idx[-1]]), 1)
+
+
+class _UnitArea:
+    """Stands in for a Vehicle in mechanism hooks evaluated per unit contact area."""
+
+    contact_area = 1.0
+
+
+def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain) -> dict:
+    c = BY_EFFECT[effect]
+    window = effect_window_ms(after, effect) or (0.0, float(after.measurement.t.max()) * 1e3)
+    t_mid = np.array([window[0], window[1]]) / 1e3
+    crush = model_crush(after, np.linspace(t_mid[0], t_mid[1], 50))
+    parameters = {}
+    for p in c.parameters:
+        field = p.name.split(".", 1)[1]
+        parameters[c.report[field]] = {"value": after.values[p.name], "unit": p.unit, "std": after.std[p.name]}
+    gains = {ch: channel_chi2(before, tau)[ch] - v for ch, v in channel_chi2(after, tau).items()}
+    return {
+        "effect": effect,
+        "explanation": c.explanation,
+        "window_ms": [float(window[0]), float(window[1])],
+        "parameters": parameters,
+        "rms_before_m": before.rms_m,
+        "rms_after_m": after.rms_m,
+        "bic_before": bic(before, tau),
+        "bic_after": bic(after, tau),
+        "phase": phases_spanned(window, _phases(after)),
+        "crush_window_m": [round(float(crush.min()), 3), round(float(crush.max()), 3)],
+        "channels": [ch for ch, g in sorted(gains.items(), key=lambda kv: -kv[1]) if g > 0][:3],
+        "held_out_chi2_gain": cv_gain,
+    }
+
+
+def phases_spanned(window, phases) -> str:
+    """The crash phases a window (ms) spans, in order: "compression and restitution"."""
+    names = [phase_at(float(x), phases) for x in np.linspace(window[0], window[1], 200)]
+    return " and ".join(dict.fromkeys(names))
+
+
+def _phases(fr):
+    from identify.residuals import phase_times_ms
+
+    return phase_times_ms(fr)
+
+
+def _plausible(effect: str, fr: FitResult, vehicle) -> str:
+    """'' when the fitted mechanism acts inside the recorded crash, else why not."""
+    crush_max = float(np.max(np.asarray(fr.trajectory.crush)))
+    for p in BY_EFFECT[effect].parameters:
+        value, sd = fr.values[p.name], fr.std[p.name]
+        if not np.isfinite(sd):
+            return f"{p.name} is not determined by the data"
+        if p.name.endswith(".depth") and value > crush_max - 0.005:
+            return f"its depth ({value:.3f} m) is not reached (maximum crush {crush_max:.3f} m)"
+        if p.name.endswith(".depth") and sd > 0.1:
+            return f"its depth is not determined (std {sd:.3f} m)"
+    if effect == "rear_axle_lift":
+        from identify.candidates import neutral_values
+
+        name = "rear_axle_lift.rear_axle_stiffness"
+        if abs(fr.values[name] - neutral_values(vehicle)[name]) < 3 * fr.std[name]:
+            return "the rear axle's stiffness does not differ from the vehicle file's"
+    if effect == "rate_dependence" and fr.values["rate_dependence.rate_coefficient"] <= 0:
+        return "a negative rate coefficient (the structure softer when crushed fast) is not physical"
+    if effect == "stiffness_zone":
+        k0, kz = fr.values.get("k_compression", float(fr.params.k_compression)), fr.values["stiffness_zone.k_zone"]
+        if abs(kz - k0) < 2 * fr.std["stiffness_zone.k_zone"]:
+            return "the zone's stiffness does not differ from the base stiffness"
+    return ""
+
+
+def discover(
+    measurement,
+    vehicle,
+    base: FitResult,
+    options: DiscoveryOptions = DiscoveryOptions(),
+    progress=None,
+) -> DiscoveryResult:
+    """Look for physics the base model leaves out (see module doc).
+
+    Parameters
+    ----------
+    measurement : identify.Measurement that ``base`` was fitted to.
+    vehicle : sim.Vehicle.
+    base : FitResult of the base model (``identify.fitting.fit``).
+    options : DiscoveryOptions.
+    progress : callable taking a one-line status, or None.
+
+    Returns
+    -------
+    DiscoveryResult.
+    """
+    say = progress or (lambda s: None)
+    speed_mps = None if "impact_speed" in base.names else base.speed
+    spec = superset_spec(base.names)
+    template = superset_template(base.params)
+    fopts = dataclasses.replace(options.fit, solver=options.fit.solver)
+
+    def run(active, initial, meas=measurement):
+        label = "+".join(("base", *active))
+        return fit(meas, vehicle, template=template, free=spec, initial=initial, options=fopts,
+                   speed_mps=speed_mps, model=label, held=held_for(active, vehicle), require_convergence=False)
+
+    def run_to_convergence(active, initial):
+        """A candidate fit, continued from where it stopped while the step limit stopped it
+        (the limit keeps each compiled solve short; a far optimum takes a few)."""
+        fr = run(active, initial)
+        for _ in range(options.continuations):
+            if fr.converged:
+                break
+            fr = run(active, dict(fr.values))
+        return fr
+
+    say("discovery: refitting the base model")
+    current = run((), dict(base.values))
+    start = current
+    before = analyse(current, window_ms=options.window_ms, threshold=options.threshold)
+    screen = not before.white or any(c.ljung_box_p < 1e-3 for c in before.channels.values())
+    accepted: list[str] = []
+    discoveries: list[dict] = []
+    rounds: list[list[Trial]] = []
+    folds = _cv_folds(measurement, options.cv_block_ms)
+    cv_cache: dict[tuple, list] = {}
+
+    def cv_fits(active, values):
+        key = tuple(active)
+        if key not in cv_cache:
+            cv_cache[key] = [run(active, values, meas=f) for f, _ in folds]
+        return cv_cache[key]
+
+    now = before
+    while screen and len(accepted) < options.max_effects:
+        trials, fits = [], {}
+        todo = [c for c in CANDIDATES if c.effect not in accepted]
+        for i, c in enumerate(todo):
+            say(f"discovery: round {len(rounds) + 1}, candidate {c.effect} ({i + 1} of {len(todo)})")
+            best = None
+            for guess in starting_guesses(c, current, vehicle, now):
+                try:
+                    fr = run_to_convergence((*accepted, c.effect), {**current.values, **guess})
+                except UserError:  # a start that fails is a start that lost
+                    continue
+                if best is None or fr.chi2 < best.chi2:
+                    best = fr
+            if best is None:
+                continue
+            fits[c.effect] = best
+            tau = _tau(best)
+            d = bic(best, tau) - bic(current, tau)
+            trials.append(Trial(c.effect, sum(channel_chi2(best, tau).values()), d, None,
+                                {n: best.values[n] for n in c.names}, False, ""))
+        trials.sort(key=lambda tr: tr.delta_bic)
+        chosen = None
+        for k, tr in enumerate(trials):
+            if chosen is not None:
+                trials[k] = dataclasses.replace(tr, reason="another candidate was accepted")
+                continue
+            if tr.delta_bic > -options.min_bic_gain:
+                trials[k] = dataclasses.replace(tr, reason=f"BIC change {tr.delta_bic:+.1f} is not below "
+                                                           f"-{options.min_bic_gain:g}")
+                continue
+            cand = fits[tr.effect]
+            why = _plausible(tr.effect, cand, vehicle)
+            if why:
+                trials[k] = dataclasses.replace(tr, reason=why)
+                continue
+            say(f"discovery: held-out check of {tr.effect}")
+            tau = _tau(cand)
+            cur_cv = _held_out_chi2(cv_fits(tuple(accepted), current.values), folds, measurement, tau)
+            new_cv = _held_out_chi2(cv_fits((*accepted, tr.effect), cand.values), folds, measurement, tau)
+            gain = cur_cv - new_cv
+            if gain <= 0:
+                trials[k] = dataclasses.replace(tr, cv_gain=gain, reason=f"does not predict held-out data better "
+                                                                         f"(chi2 gain {gain:+.1f})")
+                continue
+            trials[k] = dataclasses.replace(tr, cv_gain=gain, accepted=True)
+            chosen = (tr.effect, cand, tau, gain)
+        rounds.append(trials)
+        if chosen is None:
+            break
+        effect, cand, tau, gain = chosen
+        entry = _discovery_entry(effect, current, cand, tau, gain)
+        chosen_bic = next(tr.delta_bic for tr in trials if tr.accepted)
+        entry["alternatives"] = [{"effect": tr.effect, "bic_above_accepted": tr.delta_bic - chosen_bic}
+                                 for tr in trials if not tr.accepted and tr.delta_bic - chosen_bic < options.min_bic_gain]
+        discoveries.append(entry)
+        accepted.append(effect)
+        current = cand
+        now = analyse(current, window_ms=options.window_ms, threshold=options.threshold)
+        if now.white:
+            break
+
+    after = analyse(current, window_ms=options.window_ms, threshold=options.threshold)
+    missing = None
+    if not after.white:
+        from identify.missing_force import estimate_missing_force
+
+        say("discovery: estimating the unexplained force")
+        missing = estimate_missing_force(current, after, vehicle, min_bic_gain=options.min_bic_gain)
+        if missing is not None:
+            discoveries.append(missing.as_discovery(current))
+
+    for entry in discoveries:  # parameters and windows as the final model (all effects together) has them
+        c = BY_EFFECT.get(entry["effect"])
+        if c is not None:
+            window = effect_window_ms(current, entry["effect"])
+            if window is not None:
+                crush = model_crush(current, np.linspace(window[0], window[1], 50) / 1e3)
+                entry["window_ms"] = [float(window[0]), float(window[1])]
+                entry["crush_window_m"] = [round(float(crush.min()), 3), round(float(crush.max()), 3)]
+                entry["phase"] = phases_spanned(window, _phases(current))
+            for p in c.parameters:
+                field = c.report[p.name.split(".", 1)[1]]
+                entry["parameters"][field] = {"value": current.values[p.name], "unit": p.unit,
+                                              "std": current.std[p.name]}
+    final = _final(current, accepted)
+    status = _status(discoveries, before, after)
+    return DiscoveryResult(discoveries, final, start, status, before, after, rounds, missing)
+
+
+def _final(fr: FitResult, accepted) -> FitResult:
+    """The fit with only the accepted mechanisms in its Params (the superset's switched-off
+    ones dropped: the trajectory is the same)."""
+    params = dataclasses.replace(fr.params, mechanisms=accepted_mechanisms(fr.values, accepted))
+    return dataclasses.replace(fr, params=params, model="+".join(("base", *accepted)))
+
+
+def _status(discoveries, before: ResidualAnalysis, after: ResidualAnalysis) -> str:
+    named = [d for d in discoveries if d["effect"] != "unexplained"]
+    unexplained = [d for d in discoveries if d["effect"] == "unexplained"]
+    if not discoveries:
+        if after.white:
+            return "no missing physics: residuals are white noise in all channels"
+        chans = sorted({w.channel for w in after.windows})
+        return ("no missing physics justified: residuals are not white in " + ", ".join(chans)
+                + ", but neither a candidate mechanism nor an extra force lowers the BIC enough")
+    parts = []
+    if named:
+        parts.append(f"{len(named)} effect{'s' if len(named) > 1 else ''} found ("
+                     + ", ".join(d["effect"] for d in named) + ")")
+    if unexplained:
+        parts.append(f"{len(unexplained)} mismatch{'es' if len(unexplained) > 1 else ''} unexplained "
+                     f"({unexplained[0]['window_ms'][0]:.0f}-{unexplained[0]['window_ms'][1]:.0f} ms)")
+    tail = "; residuals are now white noise" if after.white else ""
+    return "; ".join(parts) + tail
