@@ -48,7 +48,7 @@ from identify.candidates import (
 )
 from identify.errors import UserError
 from identify.fitting import FitOptions, FitResult, fit
-from identify.residuals import ResidualAnalysis, analyse, channel_chi2, model_crush, phase_at
+from identify.residuals import ResidualAnalysis, analyse, channel_chi2, model_crush, phase_at, phase_times_ms
 
 
 # Candidate fits start next to the answer (the current fit's values): a looser tolerance
@@ -242,41 +242,40 @@ class _UnitArea:
 
 
 def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain) -> dict:
-    c = BY_EFFECT[effect]
-    window = effect_window_ms(after, effect) or (0.0, float(after.measurement.t.max()) * 1e3)
-    t_mid = np.array([window[0], window[1]]) / 1e3
-    crush = model_crush(after, np.linspace(t_mid[0], t_mid[1], 50))
-    parameters = {}
-    for p in c.parameters:
-        field = p.name.split(".", 1)[1]
-        parameters[c.report[field]] = {"value": after.values[p.name], "unit": p.unit, "std": after.std[p.name]}
+    """The result.json entry of an effect accepted with fit ``after`` over ``before``."""
     gains = {ch: channel_chi2(before, tau)[ch] - v for ch, v in channel_chi2(after, tau).items()}
-    return {
+    entry = {
         "effect": effect,
-        "explanation": c.explanation,
-        "window_ms": [float(window[0]), float(window[1])],
-        "parameters": parameters,
+        "explanation": BY_EFFECT[effect].explanation,
         "rms_before_m": before.rms_m,
         "rms_after_m": after.rms_m,
         "bic_before": bic(before, tau),
         "bic_after": bic(after, tau),
-        "phase": phases_spanned(window, _phases(after)),
-        "crush_window_m": [round(float(crush.min()), 3), round(float(crush.max()), 3)],
         "channels": [ch for ch, g in sorted(gains.items(), key=lambda kv: -kv[1]) if g > 0][:3],
         "held_out_chi2_gain": cv_gain,
     }
+    window = effect_window_ms(after, effect) or (0.0, float(after.measurement.t.max()) * 1e3)
+    _describe(entry, after, window)
+    return entry
+
+
+def _describe(entry: dict, fr: FitResult, window) -> None:
+    """Set a named effect's parameters in ``entry`` as fit ``fr`` has them and, when
+    ``window`` (ms) is given, its window, the crush range over it and the phases it spans."""
+    c = BY_EFFECT[entry["effect"]]
+    if window is not None:
+        crush = model_crush(fr, np.linspace(window[0], window[1], 50) / 1e3)
+        entry["window_ms"] = [float(window[0]), float(window[1])]
+        entry["crush_window_m"] = [round(float(crush.min()), 3), round(float(crush.max()), 3)]
+        entry["phase"] = phases_spanned(window, phase_times_ms(fr))
+    entry["parameters"] = {c.report[p.name.split(".", 1)[1]]: {"value": fr.values[p.name], "unit": p.unit,
+                                                               "std": fr.std[p.name]} for p in c.parameters}
 
 
 def phases_spanned(window, phases) -> str:
     """The crash phases a window (ms) spans, in order: "compression and restitution"."""
     names = [phase_at(float(x), phases) for x in np.linspace(window[0], window[1], 200)]
     return " and ".join(dict.fromkeys(names))
-
-
-def _phases(fr):
-    from identify.residuals import phase_times_ms
-
-    return phase_times_ms(fr)
 
 
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
@@ -437,18 +436,8 @@ def discover(
             discoveries.append(missing.as_discovery(current))
 
     for entry in discoveries:  # parameters and windows as the final model (all effects together) has them
-        c = BY_EFFECT.get(entry["effect"])
-        if c is not None:
-            window = effect_window_ms(current, entry["effect"])
-            if window is not None:
-                crush = model_crush(current, np.linspace(window[0], window[1], 50) / 1e3)
-                entry["window_ms"] = [float(window[0]), float(window[1])]
-                entry["crush_window_m"] = [round(float(crush.min()), 3), round(float(crush.max()), 3)]
-                entry["phase"] = phases_spanned(window, _phases(current))
-            for p in c.parameters:
-                field = c.report[p.name.split(".", 1)[1]]
-                entry["parameters"][field] = {"value": current.values[p.name], "unit": p.unit,
-                                              "std": current.std[p.name]}
+        if entry["effect"] in BY_EFFECT:
+            _describe(entry, current, effect_window_ms(current, entry["effect"]))
     final = _final(current, accepted)
     status = _status(discoveries, before, after)
     return DiscoveryResult(discoveries, final, start, status, before, after, rounds, missing)

@@ -1,11 +1,11 @@
 """Figures of a discovery (PNG, matplotlib Agg).
 
-- ``discovery_residuals.png``: each fitted channel's residual before discovery (base model)
-  and after (every accepted mechanism), with the measurement's +-2 sigma band and each
-  discovery's window shaded and labelled;
+- ``discovery_residuals.png``: each channel's residual before discovery (base model) and
+  after (every accepted mechanism), with the measurement's +-2 sigma band and each
+  discovery's window shaded and labelled (``identify.plots.plot_residuals``);
 - ``discovery_force_deflection.png``: the force-deflection curve the recording implies
-  (F = -m a, a the CFC 180 second derivative of the measured x; crush from the measured x
-  and pitch on the fitted force line) against the base model's and the final model's;
+  (F = -m a, a the smoothed second derivative of the measured x; crush from the measured
+  x and pitch on the fitted force line) against the base model's and the final model's;
   with an unexplained effect, its estimated force over time below.
 """
 
@@ -19,17 +19,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from identify.plots import CHANNEL_LABELS  # noqa: E402
-
-COLOURS = ("tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
+from identify.plots import WINDOW_COLOURS, plot_residuals  # noqa: E402
 
 
 def implied_force_deflection(fr, vehicle):
     """(crush (m), force (N)) implied by the measured motion, contact samples only.
 
-    Force from the measured x: F = -m a, a the second derivative of x after a CFC 180
-    low-pass (SAE J211); crush = x + dz' sin(pitch) with the fitted dz' (pitch measured
-    when recorded, else the model's)."""
+    Force from the measured x: F = -m a, a the second derivative of x from a cubic
+    Savitzky-Golay filter over ~11 ms; crush = x + dz' sin(pitch) with the fitted dz'
+    (when pitch is recorded; else crush = x)."""
     from scipy.signal import savgol_filter
 
     m = fr.measurement
@@ -65,44 +63,10 @@ def plot_discovery(result, out_dir, vehicle=None) -> list[str]:
     return names
 
 
-def _shade(ax, discoveries):
-    for k, d in enumerate(discoveries):
-        a, b = d["window_ms"]
-        colour = COLOURS[k % len(COLOURS)]
-        ax.axvspan(a, b, color=colour, alpha=0.15)
-
-
 def _residuals(result, path: Path) -> Path:
-    before, after = result.start, result.final
-    m = after.measurement
-    channels = [c for c in after.predictions if c in m.channels and c not in m.derived and c in CHANNEL_LABELS]
-    fig, axes = plt.subplots(len(channels), 1, figsize=(9, 2.2 * len(channels) + 0.8), sharex=True, squeeze=False)
-    for ax, c in zip(axes[:, 0], channels):
-        label, unit, scale = CHANNEL_LABELS[c]
-        ok = m.valid(c)
-        t = np.asarray(m.t)[ok] * 1e3
-        y = np.asarray(m.channels[c])[ok]
-        sig = np.asarray(m.sigma[c])[ok]
-        ax.fill_between(t, -2 * sig * scale, 2 * sig * scale, color="0.85", label="+-2 sigma of the measurement")
-        ax.plot(t, (y - np.asarray(before.predictions[c])[ok]) * scale, color="tab:red", lw=0.8,
-                label=f"before ({before.model})")
-        ax.plot(t, (y - np.asarray(after.predictions[c])[ok]) * scale, color="tab:blue", lw=0.8,
-                label=f"after ({after.model})")
-        _shade(ax, result.discoveries)
-        ax.set_ylabel(f"{label} ({unit})")
-        ax.grid(alpha=0.3)
-    top = axes[0, 0]
-    for k, d in enumerate(result.discoveries):
-        a, b = d["window_ms"]
-        top.annotate(d["effect"], xy=(0.5 * (a + b), 1.0), xycoords=("data", "axes fraction"), ha="center",
-                     va="bottom", fontsize=8, color=COLOURS[k % len(COLOURS)])
-    top.legend(loc="lower right", fontsize=7)
-    axes[-1, 0].set_xlabel("time after first contact (ms)")
-    fig.suptitle(f"Residuals (measured - model): {result.status}", fontsize=9, y=0.995)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    windows = [(d["effect"], *d["window_ms"]) for d in result.discoveries]
+    return plot_residuals(result.final, path, windows=windows, before=result.start,
+                          title=f"Residuals (measured - model): {result.status}")
 
 
 def _force_deflection(result, path: Path, vehicle) -> Path:
@@ -121,7 +85,7 @@ def _force_deflection(result, path: Path, vehicle) -> Path:
     for k, d in enumerate(result.discoveries):
         lo, hi = d.get("crush_window_m", [np.nan, np.nan])
         if np.isfinite(lo):
-            ax.axvspan(lo, hi, color=COLOURS[k % len(COLOURS)], alpha=0.12, label=f"{d['effect']} (crush range)")
+            ax.axvspan(lo, hi, color=WINDOW_COLOURS[k % len(WINDOW_COLOURS)], alpha=0.12, label=f"{d['effect']} (crush range)")
     ax.set_xlabel("crush (m)")
     ax.set_ylabel("barrier force (kN)")
     ax.grid(alpha=0.3)

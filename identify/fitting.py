@@ -153,18 +153,31 @@ def _values(spec, u, data):
     }
 
 
+def model_on_clock(values, data, channels, n_out: int, solver: Solver):
+    """The model with physical ``values`` (name -> value, ``identify.model`` names) seen on
+    the measurement's clock (pure, jit-able; ``model_on_clock_jit`` is the compiled one).
+
+    data : dict with ``template`` (sim.Params the values go into), ``speed_guess`` (m/s,
+        the impact speed when ``values`` has none), ``vehicle`` (sim.Vehicle) and ``t``
+        ((n,) s, measurement times).
+    Returns (trajectory, [(n,) prediction of each of ``channels``], impact speed m/s)."""
+    params, speed, contact_time = assemble(data["template"], values, data["speed_guess"])
+    vehicle = vehicle_with(data["vehicle"], values)
+    traj = _run(params, vehicle, speed, n_out, solver)
+    preds = [predict(traj, c, data["t"], speed, contact_time, vehicle.wheel_radius, solver.output_dt) for c in channels]
+    return traj, preds, speed
+
+
+model_on_clock_jit = jax.jit(model_on_clock, static_argnames=("channels", "n_out", "solver"))
+
+
 def _residual_fn(spec, channels, n_out, solver):
     """Build r(u, data) -> (m,) weighted residuals (pure, jit-able)."""
-    h = solver.output_dt
 
     def residuals(u, data):
-        values = _values(spec, u, data)
-        params, speed, contact_time = assemble(data["template"], values, data["speed_guess"])
-        vehicle = vehicle_with(data["vehicle"], values)
-        traj = _run(params, vehicle, speed, n_out, solver)
+        _, preds, speed = model_on_clock(_values(spec, u, data), data, channels, n_out, solver)
         out = []
-        for c, name in enumerate(channels):
-            pred = predict(traj, name, data["t"], speed, contact_time, vehicle.wheel_radius, h)
+        for c, (name, pred) in enumerate(zip(channels, preds)):
             w = data["w"][c]
             diff = pred - data["y"][c]
             if name in OFFSET_FREE:
@@ -215,14 +228,8 @@ def _finish(spec, channels, n_out, options, data, u):
     fn = _residual_fn(spec, channels, n_out, options.solver)
     r, jac_u = fn(u, data), jax.jacfwd(fn)(u, data)
     dvalue_du = jnp.stack([jax.grad(p.to_physical)(u[i]) for i, p in enumerate(spec)])
-    values = _values(spec, u, data)
-    params, speed, contact_time = assemble(data["template"], values, data["speed_guess"])
-    traj = _run(params, vehicle_with(data["vehicle"], values), speed, n_out, options.solver)
-    h = options.solver.output_dt
-    preds = jnp.stack(
-        [predict(traj, c, data["t"], speed, contact_time, data["vehicle"].wheel_radius, h) for c in channels]
-    )
-    return r, jac_u, dvalue_du, traj, preds
+    traj, preds, _ = model_on_clock(_values(spec, u, data), data, channels, n_out, options.solver)
+    return r, jac_u, dvalue_du, traj, jnp.stack(preds)
 
 
 _finish_jit = jax.jit(_finish, static_argnames=("spec", "channels", "n_out", "options"))

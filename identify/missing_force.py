@@ -97,18 +97,17 @@ def x_sensitivities(fr, vehicle, rel_step: float = 1e-4) -> np.ndarray:
     measurement's clock, central differences (the compiled simulation is shared)."""
     import jax.numpy as jnp
 
-    from identify.model import assemble, predict, vehicle_with
+    from identify.fitting import model_on_clock_jit
     from sim import Solver
-    from sim.simulate import _run_jit
 
     t = jnp.asarray(fr.measurement.t)
     n_out = len(np.asarray(fr.trajectory.t))
+    data = dict(template=fr.params, speed_guess=jnp.asarray(float(fr.speed)), vehicle=vehicle, t=t)
 
     def x_of(values):
-        params, speed, contact_time = assemble(fr.params, {k: jnp.asarray(v) for k, v in values.items()}, fr.speed)
-        veh = vehicle_with(vehicle, values)
-        traj = _run_jit(params, veh, jnp.asarray(speed, dtype=float), n_out, Solver())
-        return np.asarray(predict(traj, "x_m", t, speed, contact_time, veh.wheel_radius, Solver().output_dt))
+        _, (x,), _ = model_on_clock_jit({k: jnp.asarray(float(v)) for k, v in values.items()}, data, ("x_m",), n_out,
+                                        Solver())
+        return np.asarray(x)
 
     cols = []
     for name in fr.names:

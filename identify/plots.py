@@ -71,28 +71,39 @@ def plot_displacement_velocity(result, default_traj, path: Path) -> Path:
     return path
 
 
-def plot_residuals(result, path: Path, windows=()) -> Path:
-    """Residual (measured - fitted) of each fitted channel with its +-2 sigma band.
+WINDOW_COLOURS = ("tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
 
-    ``windows``: (label, t0_ms, t1_ms) spans to shade (discoveries)."""
+
+def plot_residuals(result, path: Path, windows=(), before=None, title: str = "") -> Path:
+    """Residual (measured - fitted) of each channel of ``result`` with its +-2 sigma band.
+
+    ``windows``: (label, t0_ms, t1_ms) spans to shade (discoveries); ``before``: a fit of
+    the same measurement drawn too (the base model before discovery); ``title``: above all."""
     m = result.measurement
     names = list(result.predictions)
     fig, axes = plt.subplots(len(names), 1, figsize=(8, 1.9 * len(names) + 0.6), sharex=True, squeeze=False)
     for ax, name in zip(axes[:, 0], names):
         label, unit, scale = CHANNEL_LABELS.get(name, (name, "", 1.0))
         ok = m.valid(name)
-        res = (m.channels[name] - result.predictions[name]) * scale
         ax.fill_between(m.t[ok] * 1e3, -2 * m.sigma[name][ok] * scale, 2 * m.sigma[name][ok] * scale,
                         color="0.85", label="measurement +-2 sigma")  # fmt: skip
-        ax.plot(m.t[ok] * 1e3, res[ok], lw=0.8, color="tab:blue")
-        rms = result.rms[name] * scale
+        for fit, colour in ((before, "tab:red"), (result, "tab:blue")):
+            if fit is not None:
+                res = (m.channels[name] - fit.predictions[name]) * scale
+                ax.plot(m.t[ok] * 1e3, res[ok], lw=0.8, color=colour, label=f"{fit.model}: RMS {fit.rms[name] * scale:.3g}")
         ax.set_ylabel(f"{label} ({unit})")
-        ax.set_title(f"{label}: RMS {rms:.3g} {unit}", fontsize=9, loc="left")
-        for wlabel, t0, t1 in windows:
-            ax.axvspan(t0, t1, color="tab:orange", alpha=0.2)
-            ax.text(t0, ax.get_ylim()[1], wlabel, fontsize=7, va="top")
+        ax.set_title(f"{label}: RMS {result.rms[name] * scale:.3g} {unit}", fontsize=9, loc="left")
+        for k, (_, t0, t1) in enumerate(windows):
+            ax.axvspan(t0, t1, color=WINDOW_COLOURS[k % len(WINDOW_COLOURS)], alpha=0.2)
         ax.grid(alpha=0.3)
+    for k, (wlabel, t0, t1) in enumerate(windows):  # each window named once, above the top panel, centred
+        axes[0, 0].annotate(wlabel, xy=(0.5 * (t0 + t1), 1.0), xycoords=("data", "axes fraction"), ha="center",
+                            va="bottom", fontsize=7, color=WINDOW_COLOURS[k % len(WINDOW_COLOURS)])
+    if before is not None:
+        axes[0, 0].legend(loc="lower right", fontsize=7)
     axes[-1, 0].set_xlabel("time since first contact (ms)")
+    if title:
+        fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
