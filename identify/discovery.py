@@ -23,7 +23,7 @@ The loop (one round per effect):
    least ``min_bic_gain``, its mechanism is active inside the recorded crash (a depth the
    crush reaches) and it predicts held-out parts of the recording better than the current
    model (two-fold block cross-validation: fit on alternate ``cv_block_ms`` blocks,
-   predict the others);
+   predict the others; the first block after contact is fitted in both folds);
 4. the loop stops when the residuals are noise or no candidate is justified. Misfit that
    remains is estimated as a missing force (``identify.missing_force``) and reported as
    ``unexplained`` with its window and a description of its shape, when that force is
@@ -181,12 +181,18 @@ def bic(fr: FitResult, tau: dict[str, float]) -> float:
 
 def _cv_folds(measurement, block_ms: float):
     """Two measurements of the same shape, each with alternate blocks after contact
-    unmeasured (sigma NaN), and the boolean masks of the samples each leaves out."""
+    unmeasured (sigma NaN), and the boolean masks of the samples each leaves out.
+
+    The first block after contact is kept in both folds: it fixes when the contact began
+    (the fitted contact time). A fold without it trades the contact time against the
+    stiffness, and its prediction of the onset it never saw would judge every model by
+    that extrapolation rather than by its mechanism (on NHTSA 10146 the base model's own
+    held-out chi2 was 32,000 in that fold against 320 in the other)."""
     t_ms = np.asarray(measurement.t) * 1e3
     block = np.floor(t_ms / block_ms).astype(int)
     out = []
     for fold in (0, 1):
-        left_out = (t_ms >= 0) & (block % 2 == fold)
+        left_out = (block >= 1) & (block % 2 == fold)
         sigma = {c: np.where(left_out, np.nan, s) for c, s in measurement.sigma.items()}
         out.append((dataclasses.replace(measurement, sigma=sigma), left_out))
     return out
@@ -263,6 +269,9 @@ def _describe(entry: dict, fr: FitResult, window) -> None:
     """Set a named effect's parameters in ``entry`` as fit ``fr`` has them and, when
     ``window`` (ms) is given, its window, the crush range over it and the phases it spans."""
     c = BY_EFFECT[entry["effect"]]
+    mech = next((m for m in fr.params.mechanisms if m.effect == entry["effect"]), None)
+    if mech is not None:
+        entry["explanation"] = mech.explain(fr.params)
     if window is not None:
         crush = model_crush(fr, np.linspace(window[0], window[1], 50) / 1e3)
         entry["window_ms"] = [float(window[0]), float(window[1])]
@@ -276,6 +285,12 @@ def phases_spanned(window, phases) -> str:
     """The crash phases a window (ms) spans, in order: "compression and restitution"."""
     names = [phase_at(float(x), phases) for x in np.linspace(window[0], window[1], 200)]
     return " and ".join(dict.fromkeys(names))
+
+
+# parameters whose value 0 switches their mechanism off: a fit that cannot tell them from 0
+# has not found the mechanism (it has spent a parameter on a combination the others already fix)
+_ZERO_IS_OFF = {"progressive_stiffness": ("progressive_stiffness.progression",),
+                "rate_dependence": ("rate_dependence.rate_coefficient",)}
 
 
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
@@ -297,6 +312,9 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
             return "the rear axle's stiffness does not differ from the vehicle file's"
     if effect == "rate_dependence" and fr.values["rate_dependence.rate_coefficient"] <= 0:
         return "a negative rate coefficient (the structure softer when crushed fast) is not physical"
+    for name in _ZERO_IS_OFF.get(effect, ()):
+        if abs(fr.values[name]) < 2 * fr.std[name]:
+            return f"{name} ({fr.values[name]:.3g} +- {fr.std[name]:.2g}) does not differ from 0, where it changes nothing"
     if effect == "stiffness_zone":
         k0, kz = fr.values.get("k_compression", float(fr.params.k_compression)), fr.values["stiffness_zone.k_zone"]
         if abs(kz - k0) < 2 * fr.std["stiffness_zone.k_zone"]:

@@ -6,11 +6,18 @@ itself; comparing the model's predicted force with it is a test nobody can tune 
 - :func:`measured_force`: the sum of the barrier's X load cells, offset-free, filtered
   with SAE J211 CFC 60 (as J211 prescribes for barrier forces), times from first contact;
 - :func:`momentum_check`: the force's impulse against the test mass times the vehicle's
-  change of velocity (a check of the recording itself);
+  change of velocity (a check of the recording itself), for the averaged motion and for
+  each accelerometer alone (their spread is how well the recording knows that change);
+- :func:`rigid_body_force`: the test mass times the measured deceleration, the force a
+  rigid car moving exactly as the accelerometers say would feel; scored against the load
+  cells like a prediction, it shows how much of the force's mismatch no one-body model
+  fitted to the motion can remove (the car is not rigid: its engine and cabin stop at
+  different times);
 - :func:`compare_forces`: peak force and impulse errors and the ISO/TS 18571 objective
   rating (:func:`iso18571`);
 - :func:`write_forces_csv`, :func:`plot_force_time`, :func:`plot_force_crush`: the
   ``forces.csv`` of ``docs/interface.md`` and two PNG plots.
+- :func:`model_force`: a simulated force on the measurement's clock, CFC-filtered as the cells;
 - :func:`check_forces`: the comparison, ``forces.csv`` and the plots into a results folder;
 - :func:`force_check_document`: one call for the fit command, the measured force, the
   momentum check and :func:`check_forces`, returned as a JSON-ready dictionary for
@@ -53,8 +60,8 @@ import numpy as np
 
 from identify.errors import UserError
 
-__all__ = ["BarrierForce", "Iso18571", "ForceComparison", "measured_force", "momentum_check",
-           "iso18571", "compare_forces", "end_of_contact", "write_forces_csv",
+__all__ = ["BarrierForce", "Iso18571", "ForceComparison", "measured_force", "momentum_check", "rigid_body_force",
+           "iso18571", "compare_forces", "end_of_contact", "model_force", "write_forces_csv",
            "plot_force_time", "plot_force_crush", "check_forces", "force_check_document"]
 
 ISO_RATE_HZ = 10_000.0  # ISO/TS 18571 rates curves sampled at 10 kHz
@@ -166,6 +173,43 @@ def end_of_contact(t: np.ndarray, force: np.ndarray, level: float = CONTACT_LEVE
     if len(above) == 0:
         raise UserError("the force never rises above zero")
     return float(np.asarray(t)[above[-1]])
+
+
+def rigid_body_force(test, t_contact: float | None = None, cfc: int = 60) -> tuple[np.ndarray, np.ndarray]:
+    """The contact force a rigid car of the test mass needs to move as its accelerometers say.
+
+    F = -m * a, with a the averaged vehicle X acceleration (offset-free) filtered with the
+    load cells' class. Any one-body model's contact force is its mass times its own
+    acceleration, so a model fitting the measured motion exactly predicts this curve: scored
+    against the load cells it tells what part of the force mismatch comes from the car not
+    being rigid rather than from the model's force law.
+
+    Parameters
+    ----------
+    test : identify.recordings.SensorTest
+        With a test mass.
+    t_contact : float, optional
+        First contact on the recording's time base, s; default
+        ``identify.recordings.contact_time(test)``.
+    cfc : int
+        SAE J211 class (60, as the barrier force).
+
+    Returns
+    -------
+    t : (n,) float64
+        Time since first contact, s.
+    force : (n,) float64
+        N, positive when the car decelerates.
+    """
+    from identify.recordings.motion import combine, contact_time, filter_cfc
+
+    if not test.mass_kg:
+        raise UserError(f"{test.source}: the header gives no test mass; the rigid-body force needs it")
+    t, a = combine(test.vehicle, "mean", "vehicle accelerations", test.source)
+    if t_contact is None:
+        t_contact, _ = contact_time(test)
+    force = -float(test.mass_kg) * filter_cfc(a, 1.0 / np.median(np.diff(t)), cfc)
+    return t - t_contact, force
 
 
 def momentum_check(force: BarrierForce, mass_kg: float, t: np.ndarray, v: np.ndarray) -> dict[str, float]:
@@ -407,11 +451,19 @@ def _figure():
 
 
 def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceComparison | None = None,
-                    title: str = "") -> None:
-    """PNG of measured and predicted force (kN) against time (ms)."""
+                    title: str = "", rigid=None, base=None) -> None:
+    """PNG of measured and predicted force (kN) against time (ms); optional (t_ms, N)
+    curves: ``rigid`` (:func:`rigid_body_force`, thin grey) and ``base`` (the base model
+    before discovery, dashed)."""
     plt = _figure()
     fig, ax = plt.subplots(figsize=(8, 4.5))
+    if rigid is not None:
+        ax.plot(rigid[0], np.asarray(rigid[1]) / 1e3, color="0.6", lw=1.0,
+                label="test mass x measured deceleration (a rigid car, CFC 60)")
     ax.plot(t_ms, np.asarray(measured_N) / 1e3, color="k", label="measured (barrier load cells, CFC 60)")
+    if base is not None:
+        ax.plot(base[0], np.asarray(base[1]) / 1e3, color="tab:blue", ls="--", lw=1.2,
+                label="base model, before discovery (same CFC)")
     ax.plot(t_ms, np.asarray(predicted_N) / 1e3, color="tab:red", label="predicted (model, same CFC)")
     ax.set_xlabel("time after first contact (ms)")
     ax.set_ylabel("contact force (kN)")
@@ -444,8 +496,35 @@ def plot_force_crush(path, crush_measured_m, force_measured_N, crush_predicted_m
     plt.close(fig)
 
 
+def model_force(traj, contact_time_s: float, cfc: int) -> tuple[np.ndarray, np.ndarray]:
+    """A simulated contact force on the measurement's clock, through the load cells' filter.
+
+    J211 compares channels at the same filter class; the model's jump where the crush
+    turns is an idealisation a load cell would not show either.
+
+    Parameters
+    ----------
+    traj : sim.Trajectory
+    contact_time_s : float
+        Measurement time of the model's first contact, s.
+    cfc : int
+        SAE J211 class of the load cells.
+
+    Returns
+    -------
+    t : (n,) float64
+        s since the measured first contact.
+    force : (n,) float64
+        N.
+    """
+    from identify.recordings.motion import filter_cfc
+
+    tp = np.asarray(traj.t, dtype=float) + contact_time_s
+    return tp, filter_cfc(np.asarray(traj.force, dtype=float), 1.0 / float(tp[1] - tp[0]), cfc)
+
+
 def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
-                 contact_time_s: float = 0.0, title: str = "") -> ForceComparison:
+                 contact_time_s: float = 0.0, title: str = "", rigid=None, base=None) -> ForceComparison:
     """Compare a simulated trajectory's contact force, filtered with the load cells' CFC
     class, with the barrier's; write ``forces.csv``, ``force_time.png`` and
     ``force_crush.png`` into ``out_dir``.
@@ -466,6 +545,11 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
         model time = measurement time - contact_time_s.
     title : str
         Title of the plots.
+    rigid : (t (s), force (N)), optional
+        :func:`rigid_body_force`, drawn in the force-time plot for reference.
+    base : (t (s), force (N)), optional
+        The base model's :func:`model_force` when ``traj`` is a model with discovered
+        mechanisms, drawn dashed in the force-time plot.
 
     Returns
     -------
@@ -475,20 +559,19 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
         shorter record (the prediction is 0 before the model's contact).
     """
     out = Path(out_dir)
-    tp = np.asarray(traj.t, dtype=float) + contact_time_s
-    # The model's force through the same CFC filter as the load cells (J211: channels are
-    # compared at the same filter class); its jump where the crush turns is a modelling
-    # idealisation a load cell would not show either.
-    from identify.recordings.motion import filter_cfc
-
-    fp = filter_cfc(np.asarray(traj.force, dtype=float), 1.0 / float(tp[1] - tp[0]), force.cfc)
+    tp, fp = model_force(traj, contact_time_s, force.cfc)
     comparison = compare_forces(force.t, force.force, tp, fp)
     end_all = min(float(force.t[-1]), float(tp[-1]))
     grid = np.arange(0.0, end_all + 1e-9, 1e-3)
     fm_grid = np.interp(grid, force.t, force.force)
     fp_grid = np.interp(grid, tp, fp, left=0.0, right=0.0)
     write_forces_csv(out / "forces.csv", grid * 1e3, fm_grid, fp_grid)
-    plot_force_time(out / "force_time.png", grid * 1e3, fm_grid, fp_grid, comparison, title)
+
+    def on_grid(curve):
+        return None if curve is None else (grid * 1e3, np.interp(grid, curve[0], curve[1], left=0.0, right=0.0))
+
+    plot_force_time(out / "force_time.png", grid * 1e3, fm_grid, fp_grid, comparison, title, on_grid(rigid),
+                    on_grid(base))
     end = comparison.window_ms[1] / 1e3
     tm = np.asarray(measurement.t)
     keep = tm <= end
@@ -500,7 +583,7 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
 
 
 def force_check_document(test, measurement, traj, out_dir: str | Path, contact_time_s: float = 0.0,
-                         title: str = "") -> dict:
+                         title: str = "", base=None) -> dict:
     """Everything the force check produces for a fitted sensor test, in one call.
 
     Parameters
@@ -517,18 +600,39 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
         The fit's contact time (measurement time of the model's first contact), s.
     title : str
         Title of the plots.
+    base : (sim.Trajectory, contact time (s)), optional
+        The base model's fit, when ``traj`` is a model with discovered mechanisms: scored
+        too (``"base_model"``) and drawn in the force-time plot.
 
     Returns
     -------
     dict
-        ``{"load_cells": n, "cfc": 60, "momentum_check": {...}, **ForceComparison.to_dict()}``
-        (momentum check: the recording's own consistency, :func:`momentum_check`).
+        ``{"load_cells": n, "cfc": 60, **ForceComparison.to_dict()}``, ``"base_model"``
+        (its ForceComparison) when ``base`` is given, and, when the test
+        has a mass, ``"momentum_check"`` (the recording's own consistency,
+        :func:`momentum_check`, with ``"per_accelerometer"``: channel code -> the error
+        with that accelerometer's motion alone) and ``"rigid_body"`` (the
+        ForceComparison of :func:`rigid_body_force`, what a one-body model fitting the
+        motion exactly would score).
     """
-    force = measured_force(test)
+    from identify.recordings.motion import channel_motions, contact_time
+
+    t_contact, _ = contact_time(test)
+    force = measured_force(test, t_contact)
     doc = {"load_cells": force.n_cells, "cfc": force.cfc}
+    rigid = None
     if test.mass_kg:
-        doc["momentum_check"] = momentum_check(force, test.mass_kg, measurement.t,
-                                               measurement.channels["vx_mps"])
-    comparison = check_forces(force, traj, measurement, out_dir, contact_time_s, title)
+        check = momentum_check(force, test.mass_kg, measurement.t, measurement.channels["vx_mps"])
+        tau, each = channel_motions(test, t_contact)
+        check["per_accelerometer"] = {code: momentum_check(force, test.mass_kg, tau, v)["error"]
+                                      for code, (v, _) in each.items()}
+        doc["momentum_check"] = check
+        rigid = rigid_body_force(test, t_contact, force.cfc)
+        doc["rigid_body"] = compare_forces(force.t, force.force, *rigid).to_dict()
+    base_curve = None
+    if base is not None:
+        base_curve = model_force(base[0], base[1], force.cfc)
+        doc["base_model"] = compare_forces(force.t, force.force, *base_curve).to_dict()
+    comparison = check_forces(force, traj, measurement, out_dir, contact_time_s, title, rigid, base_curve)
     doc.update(comparison.to_dict())
     return doc

@@ -184,9 +184,11 @@ def write_results(out: Path, ident: Identification, default_traj) -> Path:
         if rec.sensor_test is not None and rec.sensor_test.barrier:
             from identify.force_check import force_check_document
 
+            start = ident.discovery.start if ident.discovery is not None else None
+            base = (start.trajectory, start.contact_time) if start is not None and fr.model != "base" else None
             ident.document["force_check"] = force_check_document(
                 rec.sensor_test, fr.measurement, fr.trajectory, tmp, fr.contact_time,
-                title=f"{vehicle.name}: barrier load cells vs fitted model ({fr.model})")
+                title=f"{vehicle.name}: barrier load cells vs fitted model ({fr.model})", base=base)
             forces = ["force_time.png", "force_crush.png"]
         (tmp / "result.json").write_text(dumps(ident.document))
         if rec.tracks is not None:

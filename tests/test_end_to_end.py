@@ -70,3 +70,15 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     tried = {t["effect"] for r in doc["discovery_rounds"] for t in r}
     assert tried == {"front_wheel_block", "stiffness_zone", "progressive_stiffness", "rate_dependence", "rear_axle_lift"}
     assert all(t["accepted"] or t["reason"] for r in doc["discovery_rounds"] for t in r)
+    # ... and found the Camry's structure softer past the first centimetres of crush
+    assert [d["effect"] for d in doc["discoveries"]] == ["stiffness_zone"]
+    zone = doc["discoveries"][0]
+    assert zone["parameters"]["k_zone"]["value"] < doc["parameters"]["k_compression"]["value"]
+    assert "softer" in zone["explanation"] and zone["rms_after_m"] < 0.7 * zone["rms_before_m"]
+    # the force check scores the base model too, and a rigid car moving exactly as measured:
+    # the better motion fit moves the force towards the rigid car's (ISO 0.730 -> 0.702, rigid 0.685)
+    base, rigid = check["base_model"], check["rigid_body"]
+    assert rigid["iso18571"]["overall"] < check["iso18571"]["overall"] < base["iso18571"]["overall"]
+    assert abs(check["impulse_error"]) < abs(base["impulse_error"])
+    report = (out / "report.md").read_text()
+    assert "base model, before discovery" in report and "a rigid car moving exactly as measured" in report

@@ -8,8 +8,9 @@ import pytest
 
 from identify.errors import UserError
 from identify.force_check import (_dtw_path, check_forces, compare_forces, end_of_contact,
-                                  force_check_document, iso18571, measured_force, momentum_check)
-from identify.recordings import measurement_from_test, read_nhtsa
+                                  force_check_document, iso18571, measured_force, momentum_check,
+                                  rigid_body_force)
+from identify.recordings import Channel, SensorTest, measurement_from_test, read_nhtsa
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 
@@ -178,6 +179,64 @@ def test_force_check_document_is_json_ready(test10146, motion, camry_run, tmp_pa
     assert abs(back["momentum_check"]["error"]) < 0.035
     assert 0 < back["iso18571"]["overall"] < 1
     assert (tmp_path / "forces.csv").exists()
+
+
+def test_the_camry_is_not_rigid(test10146, motion, camry_run, tmp_path):
+    """Test mass x the crossmembers' deceleration against the load cells: the right impulse
+    and peak size, but the engine's hit at 30-35 ms reaches the barrier, not the cabin."""
+    doc = force_check_document(test10146, motion, camry_run, tmp_path)
+    rb = doc["rigid_body"]
+    assert rb["impulse_error"] == pytest.approx(-0.030, abs=0.005)  # the momentum check, mirrored
+    assert abs(rb["peak_error"]) < 0.06 and 60.0 < rb["peak_time_predicted_ms"] < 70.0
+    assert rb["peak_time_measured_ms"] < 40.0
+    assert rb["iso18571"]["overall"] < 0.75 and rb["iso18571"]["slope"] < 0.5
+    t, f = rigid_body_force(test10146)
+    force = measured_force(test10146)
+    at = np.interp([0.030, 0.035], t, f)
+    barrier = np.interp([0.030, 0.035], force.t, force.force)
+    assert np.all(at < 0.5 * barrier)
+    # each accelerometer alone: the 3.2 % of the mean lies within their spread
+    each = doc["momentum_check"]["per_accelerometer"]
+    assert set(each) == {"93", "94", "99", "100"}
+    assert min(each.values()) < doc["momentum_check"]["error"] < max(each.values())
+    assert 0.01 < max(each.values()) - min(each.values()) < 0.03
+
+
+def _rigid_test(mass=1500.0, peak=4e5, mass_in_header=True):
+    """A synthetic sensor test of a rigid car: the barrier force is exactly mass x deceleration
+    (sin^2 pulse over 90 ms), two accelerometers, one reading 2 % high."""
+    t = np.round(np.arange(-0.05, 0.3, 1e-4), 10)
+    pulse = np.where((t >= 0) & (t <= 0.09), peak * np.sin(np.pi * np.clip(t, 0, 0.09) / 0.09) ** 2, 0.0)
+    accel = -pulse / mass
+    vehicle = (Channel("1", "left", t, accel, "acceleration"), Channel("2", "right", t, 1.02 * accel, "acceleration"))
+    barrier = (Channel("9", "cells", t, pulse, "force"),)
+    return SensorTest(source="synthetic", impact_speed_mps=15.0, mass_kg=mass if mass_in_header else None,
+                      vehicle=vehicle, barrier=barrier)
+
+
+def test_rigid_body_force_of_a_rigid_car_is_the_barrier_force(tmp_path):
+    test = _rigid_test()
+    force = measured_force(test)
+    t, f = rigid_body_force(test)
+    c = compare_forces(force.t, force.force, t, f)
+    # the mean of the two accelerometers reads 1 % high
+    assert c.impulse_error == pytest.approx(0.01, abs=2e-3)
+    assert c.peak_error == pytest.approx(0.01, abs=2e-3)
+    assert c.iso18571.overall > 0.97
+    motion = measurement_from_test(test)
+    from sim import load_vehicle, make_params, simulate
+
+    run = simulate(make_params(k_compression=1e6, k_restitution=9e5, restitution=0.1, dz_contact=0.0),
+                   load_vehicle("toyota_camry_2018"), speed=15.0, duration=0.2)
+    doc = force_check_document(test, motion, run, tmp_path)
+    each = doc["momentum_check"]["per_accelerometer"]
+    assert each["1"] == pytest.approx(0.0, abs=2e-3) and each["2"] == pytest.approx(1 / 1.02 - 1, abs=2e-3)
+    assert doc["rigid_body"]["iso18571"]["overall"] > 0.97
+
+
+def test_rigid_body_force_needs_the_test_mass():
+    with pytest.raises(UserError, match="no test mass"):
+        rigid_body_force(_rigid_test(mass_in_header=False))
 
 
 def _pulse(t):

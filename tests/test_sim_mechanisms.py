@@ -37,6 +37,15 @@ def test_stiffness_zone_changes_slope_past_its_depth(a4):
     assert float(run1.crush.max()) < float(run0.crush.max()) - 0.03
 
 
+def test_stiffness_zone_explains_itself_as_stiffer_or_softer():
+    base = named_params("paper_identified")  # k_compression 970 kN/m^3
+    stiffer = StiffnessZone(depth=jnp.asarray(0.4), k_zone=jnp.asarray(2e6))
+    softer = StiffnessZone(depth=jnp.asarray(0.1), k_zone=jnp.asarray(5e5))
+    assert stiffer.explain(base) == StiffnessZone.explanation and "faster" in stiffer.explain(base)
+    assert softer.explain(base) == StiffnessZone.softer_explanation and "more slowly" in softer.explain(base)
+    assert ProgressiveStiffness(progression=jnp.asarray(1.0)).explain(base) == ProgressiveStiffness.explanation
+
+
 def test_progressive_and_rate_dependent_forces(a4):
     base = named_params("paper_identified")
     prog = dataclasses.replace(base, mechanisms=(ProgressiveStiffness(progression=jnp.asarray(0.5)),))

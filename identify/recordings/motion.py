@@ -32,7 +32,7 @@ NOISE_END_S = -0.005  # s, pre-impact samples used for offset and noise end here
 
 __all__ = [
     "G0", "Channel", "SensorTest", "MotionOptions", "common_time_base", "combine",
-    "find_onset", "contact_time", "filter_cfc", "integrate", "motion_sigma",
+    "find_onset", "contact_time", "filter_cfc", "integrate", "motion_sigma", "channel_motions",
     "measurement_from_test", "crash_facts",
 ]
 
@@ -380,6 +380,36 @@ def motion_sigma(tau, v, x, v0, noise_sigma, fs, cfc, n_noise, options: MotionOp
             np.maximum(np.sqrt(var_x), options.sigma_floor_m))
 
 
+def channel_motions(test: SensorTest, t0: float, options: MotionOptions = MotionOptions()):
+    """Each vehicle accelerometer's own velocity and displacement, processed as the averaged
+    motion is (offset removed, CFC ``options.cfc``, integrated from the impact speed at t0).
+
+    Parameters
+    ----------
+    test : SensorTest
+    t0 : float
+        First contact on the recording's time base, s.
+    options : MotionOptions
+
+    Returns
+    -------
+    tau : (m,) float64
+        Time since contact, s.
+    motions : dict
+        Channel code -> (velocity (m,) m/s, displacement (m,) m), in ``test.vehicle``'s order.
+    """
+    t = common_time_base(test.vehicle, "vehicle accelerations")
+    fs = float(1.0 / np.median(np.diff(t)))
+    pre = _noise_window(t, test.source)
+    out, tau = {}, None
+    for ch in test.vehicle:
+        one = np.asarray(ch.values, dtype=float)
+        one = filter_cfc(one - one[pre].mean(), fs, options.cfc)
+        tau, vi, xi = integrate(t, one, t0, test.impact_speed_mps)
+        out[ch.code] = (vi, xi)
+    return tau, out
+
+
 def _vehicle_motion(test: SensorTest, t0: float, options: MotionOptions):
     """Filtered, integrated vehicle motion at the recording's rate (see measurement_from_test)."""
     t, a = combine(test.vehicle, "mean", "vehicle accelerations", test.source)
@@ -392,13 +422,9 @@ def _vehicle_motion(test: SensorTest, t0: float, options: MotionOptions):
     tau, v, x = integrate(t, af, t0, test.impact_speed_mps)
     spread_v = spread_x = None
     if len(test.vehicle) > 1:
-        vs, xs = [], []
-        for ch in test.vehicle:
-            one = np.asarray(ch.values, dtype=float)
-            one = filter_cfc(one - one[pre].mean(), fs, options.cfc)
-            _, vi, xi = integrate(t, one, t0, test.impact_speed_mps)
-            vs.append(vi)
-            xs.append(xi)
+        _, each = channel_motions(test, t0, options)
+        vs = [vi for vi, _ in each.values()]
+        xs = [xi for _, xi in each.values()]
         n = len(test.vehicle)
         spread_v = np.std(vs, axis=0, ddof=1) / np.sqrt(n)
         spread_x = np.std(xs, axis=0, ddof=1) / np.sqrt(n)

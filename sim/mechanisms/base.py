@@ -37,6 +37,11 @@ class Mechanism(eqx.Module):
         """Return the blocked fraction (0..1) of the front wheels; default: unchanged."""
         return blocked
 
+    def explain(self, params) -> str:
+        """The one-sentence explanation of this mechanism as fitted (``params``: the
+        sim.Params it belongs to); default: the class's ``explanation``."""
+        return self.explanation
+
     def parameter_values(self) -> dict[str, tuple[float, str]]:
         """The mechanism's parameters as {name: (value, unit)}, for reports."""
         return {name: (float(getattr(self, name)), unit) for name, unit in self.units.items()}

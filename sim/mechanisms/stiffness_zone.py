@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax.numpy as jnp
 
@@ -31,9 +33,18 @@ class StiffnessZone(Mechanism):
     )
     units = {"depth": "m", "k_zone": "N/m^3"}
 
+    softer_explanation: ClassVar[str] = (
+        "The front structure gets softer past a crush depth, as when a crash box or a "
+        "longitudinal member has buckled, so the force rises more slowly from there on."
+    )
+
     depth: jnp.ndarray
     k_zone: jnp.ndarray
     width: float = eqx.field(static=True, default=0.002)
+
+    def explain(self, params) -> str:
+        """The stiffening sentence, or the softening one when k_zone < k_compression."""
+        return self.softer_explanation if float(self.k_zone) < float(params.k_compression) else self.explanation
 
     def loading_force(self, force, crush, crush_rate, params, vehicle):
         extra = (self.k_zone - params.k_compression) * vehicle.contact_area
