@@ -252,7 +252,6 @@ def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain) 
     gains = {ch: channel_chi2(before, tau)[ch] - v for ch, v in channel_chi2(after, tau).items()}
     entry = {
         "effect": effect,
-        "explanation": BY_EFFECT[effect].explanation,
         "rms_before_m": before.rms_m,
         "rms_after_m": after.rms_m,
         "bic_before": bic(before, tau),
@@ -266,12 +265,11 @@ def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain) 
 
 
 def _describe(entry: dict, fr: FitResult, window) -> None:
-    """Set a named effect's parameters in ``entry`` as fit ``fr`` has them and, when
+    """Set a named effect's explanation and parameters in ``entry`` as fit ``fr`` has them and, when
     ``window`` (ms) is given, its window, the crush range over it and the phases it spans."""
     c = BY_EFFECT[entry["effect"]]
     mech = next((m for m in fr.params.mechanisms if m.effect == entry["effect"]), None)
-    if mech is not None:
-        entry["explanation"] = mech.explain(fr.params)
+    entry["explanation"] = mech.explain(fr.params) if mech is not None else c.explanation
     if window is not None:
         crush = model_crush(fr, np.linspace(window[0], window[1], 50) / 1e3)
         entry["window_ms"] = [float(window[0]), float(window[1])]
