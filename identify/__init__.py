@@ -9,6 +9,26 @@ reading recordings, fitting, results and the command line (``identify.cli``).
 """
 
 from identify.errors import UserError as UserError
-from identify.identification import Identification as Identification, fit as fit
-from identify.measurement import Measurement as Measurement
-from identify.recording import load_recording as load_recording
+
+# The rest is imported on first use (``identify.fit`` ...): the command line starts at once
+# and can honour Ctrl-C while the heavy modules (JAX, OpenCV) load in its worker thread.
+_LAZY = {
+    "Identification": "identify.identification",
+    "fit": "identify.identification",
+    "Measurement": "identify.measurement",
+    "load_recording": "identify.recording",
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'identify' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -146,6 +146,7 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     kwargs = dict(template=superset_template(template), free=superset_spec(names), speed_mps=speed_mps,
                   held=held_for((), vehicle))
     fr = fit(measurement, vehicle, options=options, progress=progress, require_convergence=False, **kwargs)
+    multi = fr  # the multi-start search; continuations below start once from its best
     for _ in range(5):  # continue the best start while the step limit stopped it
         if fr.converged:
             break
@@ -156,6 +157,8 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
             f"{measurement.source}: the fit did not converge (reduced chi-square {fr.reduced_chi2:.3g});"
             " check the vehicle, the speed and the tracks"
         )
+    fr = dataclasses.replace(fr, starts=multi.starts, starts_at_best=multi.starts_at_best,
+                             other_minima=multi.other_minima)
     return _final(fr, ())
 
 

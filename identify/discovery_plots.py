@@ -79,9 +79,12 @@ def _force_deflection(result, path: Path, vehicle) -> Path:
     ax = axes[0, 0]
     crush, force = implied_force_deflection(result.final, vehicle)
     ax.plot(crush, force / 1e3, ".", ms=2, color="0.3", label="implied by the recording (-m a)")
-    for fr, colour in ((result.start, "tab:red"), (result.final, "tab:blue")):
+    curves = [(result.final, "tab:blue", f"fitted model ({result.final.model})")]
+    if result.final.model != result.start.model or result.discoveries:
+        curves.insert(0, (result.start, "tab:red", f"{result.start.model} model before discovery"))
+    for fr, colour, label in curves:
         tr = fr.trajectory
-        ax.plot(np.asarray(tr.crush), np.asarray(tr.force) / 1e3, color=colour, lw=1.5, label=fr.model)
+        ax.plot(np.asarray(tr.crush), np.asarray(tr.force) / 1e3, color=colour, lw=1.5, label=label)
     for k, d in enumerate(result.discoveries):
         lo, hi = d.get("crush_window_m", [np.nan, np.nan])
         if np.isfinite(lo):

@@ -14,6 +14,7 @@ import numpy as np
 from identify.errors import UserError
 from identify.fitting import FitOptions, FitResult, fit as fit_measurement
 from identify.recording import Recording, load_recording
+from identify.results import ResultsFolder, default_output_folder as default_output_folder
 
 COLLISION_PARAMETERS = ("k_compression", "k_restitution", "restitution", "dz_contact")
 
@@ -43,11 +44,6 @@ class Identification:
         return self.document["parameters"]
 
 
-def default_output_folder(recording_path: Path) -> Path:
-    """``<stem>.identify/`` beside the recording (a folder of frames: beside the folder)."""
-    p = Path(recording_path)
-    stem = p.name if p.is_dir() else p.stem
-    return p.parent / f"{stem}.identify"
 
 
 def vehicle_reference(name_or_path) -> str:
@@ -171,15 +167,20 @@ def _unit(name):
     return UNITS[name]
 
 
-def write_results(out: Path, ident: Identification, default_traj) -> Path:
-    """Write the results folder atomically: result.json, tracks.csv, PNGs, report.md."""
+def write_results(out, ident: Identification, default_traj) -> Path:
+    """Write the results folder atomically: result.json, tracks.csv, PNGs, report.md.
+
+    ``out`` is a path or an open :class:`identify.results.ResultsFolder` (created before
+    the work started, so that an unwritable place fails at once)."""
     from identify import plots
     from identify.report import render_report
     from identify.results import ResultsFolder, dumps
     from sim import named_params
 
     fr, rec, vehicle = ident.fit, ident.recording, ident.vehicle
-    with ResultsFolder(out) as tmp:
+    folder = out if isinstance(out, ResultsFolder) else ResultsFolder(out)
+    out = folder.out
+    with folder as tmp:
         forces = []
         if rec.sensor_test is not None and rec.sensor_test.barrier:
             from identify.force_check import force_check_document
@@ -251,6 +252,7 @@ def fit(
     discover: bool = True,
     options: FitOptions = FitOptions(),
     progress=None,
+    force: bool = False,
 ) -> Identification:
     """Identify the collision parameters from a recording (the Python twin of ``identify fit``).
 
@@ -261,11 +263,13 @@ def fit(
     fps : the true frame rate when the container's is wrong.
     tape_segment : m, one reference-tape segment.
     speed_kmh : impact speed if known (held fixed); else measured.
-    out : results folder (default ``<recording stem>.identify/`` beside it); ``write=False``
-        writes nothing.
+    out : results folder (default ``<recording stem>.identify/`` beside it), or an
+        ``identify.results.ResultsFolder`` made already; ``write=False`` writes nothing.
     discover : look for physics the base model left out.
     options : identify.fitting.FitOptions.
     progress : callable taking a one-line status string, or None.
+    force : fit even when the film contradicts the vehicle file (wheelbase, length); the
+        result then carries the contradiction in ``"warnings"``.
 
     Returns
     -------
@@ -274,17 +278,30 @@ def fit(
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    from sim import load_vehicle, named_params, simulate
+    from sim import load_vehicle
 
     say = progress or (lambda msg: None)
     veh = load_vehicle(vehicle)
-    out_path = Path(out) if out is not None else default_output_folder(Path(recording))
-    if write:
-        from identify.results import check_output_folder
-
-        check_output_folder(out_path)
     if speed_kmh is not None and not (0 < speed_kmh <= 360):
         raise UserError(f"--speed must be in (0, 360] km/h, got {speed_kmh}")
+    if not Path(recording).exists():
+        raise UserError(f"{recording} does not exist")
+    folder = None
+    if isinstance(out, ResultsFolder):  # made by the caller before any work (``identify fit``)
+        folder = out if write else None
+    elif write:  # the results' temporary sibling is made now: an unwritable place fails at once
+        folder = ResultsFolder(Path(out) if out is not None else default_output_folder(Path(recording)))
+    try:
+        return _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover, options, say, force)
+    except BaseException:
+        if folder is not None:
+            folder.discard()
+        raise
+
+
+def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover, options, say, force):
+    from sim import named_params, simulate
+
     speed_mps = speed_kmh / 3.6 if speed_kmh is not None else None
 
     def video_progress(done, total, stage):
@@ -294,6 +311,13 @@ def fit(
     say(f"reading {recording}")
     rec = load_recording(recording, car_geometry_of(veh), fps=fps, tape_segment_m=tape_segment,
                          speed_mps=speed_mps, progress=video_progress)  # fmt: skip
+    warnings = []
+    if rec.tracks is not None:
+        from identify.consistency import check_film_against_vehicle
+
+        warnings = check_film_against_vehicle(rec.tracks, veh, vehicle_label(vehicle), force=force)
+        for w in warnings:
+            say(f"warning: {w}")
     free, held = free_parameters(rec.measurement, speed_mps)
     found = None
     if discover:
@@ -314,9 +338,20 @@ def fit(
                           vehicle_ref=vehicle_reference(vehicle))
     if found is not None:  # every candidate tried, round by round, and why it was not accepted
         doc["discovery_rounds"] = [[trial.as_dict() for trial in r] for r in found.rounds]
+        # the multi-start search is the base model's; discovery refines from its best fit
+        doc["fit"]["starts"], doc["fit"]["starts_at_best"] = base.starts, base.starts_at_best
+        doc["fit"]["starts_of"] = "base model"
+    if warnings:
+        doc["warnings"] = list(warnings)
     ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh, discovery=found)
-    if write:
-        say(f"writing {out_path}")
+    if folder is not None:
+        say(f"writing {folder.out}")
         default_traj = simulate(named_params("vsim_default"), veh, fr.speed, duration=float(fr.measurement.t.max()) + 0.001)
-        ident.out = write_results(out_path, ident, default_traj)
+        ident.out = write_results(folder, ident, default_traj)
     return ident
+
+
+def vehicle_label(name_or_path) -> str:
+    """How messages name a vehicle: its name in ``data/vehicles/``, else its file's name."""
+    p = Path(str(name_or_path))
+    return p.stem if p.suffix == ".toml" else str(name_or_path)

@@ -117,14 +117,22 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
     (as the video stage derives it) and not fitted.
     """
     path = Path(path)
+    import io
+
+    from sim._text import read_text
+
+    text = read_text(path, "tracks file", error=UserError).removeprefix("\ufeff")  # Excel's byte-order mark
     try:
-        with open(path, newline="") as f:
-            rows = list(csv.reader(f))
-    except OSError as err:
-        raise UserError(f"cannot read {path}: {err.strerror}") from None
+        rows = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as err:
+        raise UserError(f"{path}: not a CSV file ({err})") from None
     if len(rows) < 3 or not rows[0] or rows[0][0] != "t_ms":
         raise UserError(f"{path}: not a tracks.csv (its first column must be t_ms, with at least two rows)")
     header = rows[0]
+    rows = [r for r in rows if r]  # blank lines
+    short = next((i for i, r in enumerate(rows) if len(r) != len(header)), None)
+    if short is not None:
+        raise UserError(f"{path}: line {short + 1} has {len(rows[short])} values, the header names {len(header)} columns")
     try:
         data = np.array([[float(v) if v != "" else np.nan for v in r] for r in rows[1:]], dtype=float)
     except ValueError:

@@ -99,9 +99,8 @@ def plot_residuals(result, path: Path, windows=(), before=None, title: str = "")
     for k, (wlabel, t0, t1) in enumerate(windows):  # each window named once, above the top panel, centred
         axes[0, 0].annotate(wlabel, xy=(0.5 * (t0 + t1), 1.0), xycoords=("data", "axes fraction"), ha="center",
                             va="bottom", fontsize=7, color=WINDOW_COLOURS[k % len(WINDOW_COLOURS)])
-    if before is not None:
-        axes[0, 0].legend(loc="lower right", fontsize=7)
-    axes[-1, 0].set_xlabel("time since first contact (ms)")
+    axes[0, 0].legend(loc="lower right", fontsize=7)  # names the grey band: the measurement's +-2 sigma
+    axes[-1, 0].set_xlabel("time since first contact (ms); grey band: the measurement's +-2 sigma")
     if title:
         fig.suptitle(title, fontsize=9)
     fig.tight_layout()
@@ -151,6 +150,7 @@ def plot_silhouettes(result, vehicle, default_traj, path: Path, times_ms=(0, 50,
         ax.set_aspect("equal")
         ax.set_ylabel(f"{t_ms} ms")
         ax.set_yticks([])
+        ax.tick_params(labelbottom=True)  # every panel has its X scale, not only the bottom one
     axes[0, 0].legend(loc="upper left", fontsize=7, ncol=3)
     axes[-1, 0].set_xlabel("X (m), car plane; the thick line is the barrier face")
     fig.tight_layout()

@@ -27,13 +27,20 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
     figures : file names of the PNGs in the results folder, in reading order.
     """
     fitinfo = doc["fit"]
+    starts = f"{fitinfo['starts_at_best']} of {fitinfo['starts']} starting points reached the best fit"
+    if fitinfo.get("starts_of") and fitinfo.get("model", "base") != "base":
+        starts += f" of the {fitinfo['starts_of']}; the discovered effects were fitted from it"
     lines = [
         f"# Identification: {doc['vehicle_name']}",
         "",
+    ]
+    for warning in doc.get("warnings") or []:
+        lines += [f"> **Warning:** {warning}", ""]
+    lines += [
         f"Recording `{doc['recording']}` ({doc['recording_kind']}), impact speed"
         f" {doc['impact_speed_kmh']:.2f} km/h, model `{fitinfo['model']}`.",
         f"Fit: RMS {1e3 * fitinfo['rms_m']:.2f} mm in x, reduced chi-square {fitinfo['reduced_chi2']:.2f}"
-        f" ({fitinfo['starts_at_best']} of {fitinfo['starts']} starting points reached the best fit).",
+        f" ({starts}).",
         "",
         "## Parameters (the paper's Table 1, side by side)",
         "",

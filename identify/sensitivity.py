@@ -412,6 +412,11 @@ class Progress:
         self.label, self.quiet = label, quiet
         self.stream = sys.stderr if stream is None else stream
         self.t0 = time.perf_counter()
+        try:  # a terminal gets one line redrawn with \r; a file or pipe whole lines every 25 %
+            self.tty = bool(self.stream.isatty())
+        except (AttributeError, ValueError):
+            self.tty = False
+        self.quarter = -1
 
     def __call__(self, done: int, total: int) -> None:
         if self.quiet:
@@ -419,11 +424,16 @@ class Progress:
         elapsed = time.perf_counter() - self.t0
         rate = done / elapsed if elapsed > 0 else 0.0
         eta = (total - done) / rate if rate > 0 else 0.0
-        end = "\n" if done >= total else ""
-        self.stream.write(
-            f"\r{self.label}: {done:,}/{total:,} simulations, {rate:,.0f}/s, {elapsed:.0f} s elapsed, "
-            f"{eta:.0f} s left   {end}"
-        )
+        text = f"{self.label}: {done:,}/{total:,} simulations, {rate:,.0f}/s, {elapsed:.0f} s elapsed, {eta:.0f} s left"
+        if self.tty:
+            end = "\n" if done >= total else ""
+            self.stream.write(f"\r{text}   {end}")
+        else:
+            quarter = int(4 * done / total) if total else 4
+            if quarter <= self.quarter:
+                return
+            self.quarter = quarter
+            self.stream.write(text + "\n")
         self.stream.flush()
 
 

@@ -139,8 +139,13 @@ def load_params(name_or_path: str | Path, mechanisms: tuple[Mechanism, ...] = ()
                 f"unknown parameter set {str(name_or_path)!r}; known sets: {', '.join(list_param_sets())}"
                 " (or give a path to a JSON file)"
             )
+    from sim._text import read_text
+
+    text = read_text(path, "parameter file")
     try:
-        doc = json.loads(path.read_text())
+        doc = json.loads(text)
+    except RecursionError:
+        raise ConfigError(f"parameter file {path}: not valid JSON (nested too deeply)") from None
     except json.JSONDecodeError as err:
         raise ConfigError(f"parameter file {path}: not valid JSON ({err.msg}, line {err.lineno})") from None
     table = doc.get("parameters", doc) if isinstance(doc, dict) else None

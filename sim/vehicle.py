@@ -131,12 +131,18 @@ def vehicle_path(name_or_path: str | Path) -> Path:
 
 def read_vehicle_file(name_or_path: str | Path) -> dict:
     """Return the parsed TOML of a vehicle file (a name or a path), unvalidated."""
+    from sim._text import read_text
+
     path = vehicle_path(name_or_path)
+    text = read_text(path, "vehicle file", binary_check=False)  # TOML refuses control characters itself
     try:
-        with open(path, "rb") as f:
-            return tomllib.load(f)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(f"vehicle file {path}: not valid TOML ({err})") from None
+    except RecursionError:
+        raise ConfigError(f"vehicle file {path}: not valid TOML (nested too deeply)") from None
+    except ValueError as err:  # tomllib's own, e.g. an integer of more than 4300 digits
+        raise ConfigError(f"vehicle file {path}: not valid TOML ({str(err).split(';')[0]})") from None
 
 
 def load_vehicle(name_or_path: str | Path) -> Vehicle:

@@ -136,3 +136,35 @@ def test_film_that_ends_before_contact_is_one_clear_error(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and "no contact" in err and len(err.splitlines()) == 1, err
     assert not (tmp_path / "out").exists()
+
+
+def test_rerun_into_its_results_folder_keeps_the_users_files(fitted_folder):
+    """Issue 16: a re-run replaces only the files the tool wrote (the manifest says which)
+    and keeps the user's notes and the sensitivity/ folder; results get the user's umask.
+    (Last in this module: it re-runs into the shared folder, same inputs, same results.)"""
+    import os
+    import stat
+
+    from identify.results import MANIFEST
+
+    manifest = json.loads((fitted_folder / MANIFEST).read_text())["files"]
+    assert "result.json" in manifest and "report.md" in manifest
+    (fitted_folder / "notes.txt").write_text("my notes")
+    (fitted_folder / "sensitivity").mkdir()
+    (fitted_folder / "sensitivity" / "sensitivity.json").write_text("{}")
+    (fitted_folder / "result.json").write_text("{}")  # stale: ours, replaced
+    old = os.umask(0o002)
+    try:
+        code = main(["fit", str(fitted_folder.parent / "tracks.csv"), "--vehicle", "audi_a4", "--out",
+                     str(fitted_folder), "--quiet"])  # fmt: skip
+    finally:
+        os.umask(old)
+    assert code == 0
+    assert (fitted_folder / "notes.txt").read_text() == "my notes"
+    assert (fitted_folder / "sensitivity" / "sensitivity.json").read_text() == "{}"
+    assert json.loads((fitted_folder / "result.json").read_text())["vehicle"] == "audi_a4"
+    manifest = json.loads((fitted_folder / MANIFEST).read_text())["files"]
+    assert "notes.txt" not in manifest and "sensitivity" not in manifest
+    assert stat.S_IMODE((fitted_folder / "result.json").stat().st_mode) == 0o664
+    assert stat.S_IMODE((fitted_folder / "report.md").stat().st_mode) == 0o664
+    assert not [p for p in fitted_folder.parent.iterdir() if p.name.startswith(".")]

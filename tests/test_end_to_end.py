@@ -43,6 +43,10 @@ def test_sample_film_gives_the_parameters_it_was_made_with(sample_results):
     assert doc["discoveries"] == [] and doc["fit"]["model"] == "base"
     assert not any(t["accepted"] for r in doc["discovery_rounds"] for t in r)
     assert doc["discovery_status"].startswith("no missing physics")
+    # issue 16: the report counts the 5 starts of the fit (not the 1 of discovery's refit),
+    # and the film agrees with the vehicle file: no warning
+    assert doc["fit"]["starts"] == 5 and " of 5 starting points reached the best fit" in (sample_results / "report.md").read_text()
+    assert "warnings" not in doc
 
 
 @pytest.mark.slow
@@ -82,3 +86,4 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     assert abs(check["impulse_error"]) < abs(base["impulse_error"])
     report = (out / "report.md").read_text()
     assert "base model, before discovery" in report and "a rigid car moving exactly as measured" in report
+    assert " of 5 starting points reached the best fit of the base model" in report

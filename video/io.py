@@ -15,9 +15,13 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
+import os
 import re
+import struct
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
@@ -36,6 +40,91 @@ LOW_CONTAINER_FPS = 200.0
 MAX_FPS = 1.0e6
 #: Frame rate assumed for a folder of frames when none is given, frames per second.
 DEFAULT_FOLDER_FPS = 1000.0
+#: Largest frame accepted, px a side and px in all: a high-speed camera's frames are a few
+#: megapixels; a header claiming more is damaged (and decoding it would exhaust memory).
+MAX_FRAME_SIDE = 16384
+MAX_FRAME_PIXELS = 40_000_000
+
+
+def check_frame_size(width: int, height: int, where: str) -> None:
+    """Raise VideoError unless a ``width`` x ``height`` frame is within the decoding limits."""
+    if width <= 0 or height <= 0:
+        raise VideoError(f"{where} declares a frame of {width}x{height} px; the file is damaged")
+    if width > MAX_FRAME_SIDE or height > MAX_FRAME_SIDE or width * height > MAX_FRAME_PIXELS:
+        raise VideoError(
+            f"{where} declares frames of {width}x{height} px ({width * height / 1e6:.0f} MP); the limit is "
+            f"{MAX_FRAME_SIDE} px a side and {MAX_FRAME_PIXELS / 1e6:.0f} MP (high-speed cameras record a few MP): "
+            "the file is damaged, or scale the frames down")
+
+
+def image_header_size(path: Path) -> tuple[int, int] | None:
+    """``(width, height)`` a PNG, JPEG, BMP or TIFF file declares in its header, read
+    without decoding the image; None when the header is not one of these or is unreadable."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(65536)
+    except OSError:
+        return None
+    try:
+        if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
+            return struct.unpack(">II", head[16:24])
+        if head[:2] == b"BM" and len(head) >= 26:
+            w, h = struct.unpack("<ii", head[18:26])
+            return w, abs(h)
+        if head[:2] == b"\xff\xd8":
+            i = 2
+            while i + 9 < len(head):
+                if head[i] != 0xFF:
+                    return None
+                marker = head[i + 1]
+                if marker in (0xD8, 0x01) or 0xD0 <= marker <= 0xD7:
+                    i += 2
+                    continue
+                length = struct.unpack(">H", head[i + 2:i + 4])[0]
+                if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC):
+                    h, w = struct.unpack(">HH", head[i + 5:i + 9])
+                    return w, h
+                i += 2 + length
+            return None
+        if head[:4] in (b"II*\x00", b"MM\x00*"):
+            e = "<" if head[:2] == b"II" else ">"
+            off = struct.unpack(e + "I", head[4:8])[0]
+            n = struct.unpack(e + "H", head[off:off + 2])[0]
+            size = {}
+            for k in range(n):
+                tag, typ, _count = struct.unpack(e + "HHI", head[off + 2 + 12 * k:off + 10 + 12 * k])
+                raw = head[off + 10 + 12 * k:off + 14 + 12 * k]
+                if tag in (256, 257):
+                    size[tag] = struct.unpack(e + "H", raw[:2])[0] if typ == 3 else struct.unpack(e + "I", raw)[0]
+            if 256 in size and 257 in size:
+                return size[256], size[257]
+    except (struct.error, IndexError):
+        return None
+    return None
+
+
+@contextlib.contextmanager
+def native_stderr_silenced():
+    """Send what native libraries (libpng, FFmpeg) print on file descriptor 2 to nowhere
+    for the duration: a damaged file is reported by our one line, not by theirs before it.
+    Python's own ``sys.stderr`` writes made meanwhile are lost too, so keep it short."""
+    try:
+        sys.stderr.flush()
+    except (AttributeError, ValueError, OSError):
+        pass
+    try:
+        saved = os.dup(2)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        yield
+        return
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
 
 
 @dataclass(frozen=True)
@@ -225,15 +314,27 @@ class Film:
 
     def _read_file(self, i: int) -> np.ndarray:
         path = self._files[i]
-        raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        size = image_header_size(path)
+        if size is not None:
+            check_frame_size(size[0], size[1], f"frame file {path}")
+        try:
+            raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        except cv2.error:
+            raw = None
         if raw is None:
             raise VideoError(f"frame file {path} cannot be read (damaged or not an image); replace or remove it")
         return self._convert(raw)
 
     def _open_capture(self) -> cv2.VideoCapture:
-        cap = cv2.VideoCapture(str(self.path))
-        if not cap.isOpened():
+        try:
+            cap = cv2.VideoCapture(str(self.path))
+            opened = cap.isOpened()
+        except cv2.error:
+            opened = False
+        if not opened:
             raise VideoError(f"cannot open video {self.path} (damaged, truncated or an unknown format); re-export it as MP4 or a folder of PNG frames")
+        check_frame_size(int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)),
+                         f"video {self.path}")
         return cap
 
     def _read_video(self, i: int) -> np.ndarray:
@@ -448,7 +549,8 @@ def open_film(
         if path.stat().st_size == 0:
             raise VideoError(f"video {path} is empty (0 bytes); copy the film again")
         film = Film(path, None, color)
-    _scan(film, duplicate_check)
+    with native_stderr_silenced():  # the scan decodes every frame: a damaged one is our one line
+        _scan(film, duplicate_check)
 
     if fps is not None:
         film.fps, film.fps_source = fps, "user"

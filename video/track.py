@@ -464,6 +464,34 @@ def _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, axes, car, channels, si
     return events
 
 
+def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car) -> dict:
+    """The car's wheelbase and length as the film shows them (``Tracks.geometry``).
+
+    Wheelbase: the median distance of the two hub targets over the frames before contact
+    (undistorted positions at the tape's scale); its sigma combines one frame's centre
+    sigmas (tracking errors of neighbouring frames are alike, so averaging is not credited)
+    with the scale's. Length: the fitted silhouette is the vehicle file's outline scaled
+    to the film's edges, so the film's length is the file's times tape scale over
+    silhouette scale, with both scales' sigmas."""
+    out: dict = {}
+    if kf is not None and kr is not None:
+        pre = np.zeros(len(uv), bool)
+        pre[:max(int(cf), 1)] = True
+        both = pre & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
+        if both.any():
+            spacing = np.hypot(*(uv[both, kf] - uv[both, kr]).T) * s
+            value = float(np.median(spacing))
+            centre = float(np.nanmedian(np.hypot(sigma_px[both, kf], sigma_px[both, kr]))) * s
+            centre = centre if np.isfinite(centre) else 0.0
+            out["hub_spacing_m"] = value
+            out["hub_spacing_sigma_m"] = float(np.hypot(centre, value * s_sig / s))
+    if sil is not None and sil.m_per_px > 0:
+        length = float(car.length) * s / sil.m_per_px
+        out["outline_length_m"] = length
+        out["outline_length_sigma_m"] = float(length * np.hypot(s_sig / s, sil.sigma / sil.m_per_px))
+    return out
+
+
 def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
                speed_mps: float | None = None, progress: Progress | None = None,
                config: TrackerConfig = TrackerConfig()) -> Tracks:
@@ -695,6 +723,8 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
         bad = ~np.isfinite(channels[key])
         sigma[key] = np.where(bad, np.nan, sigma[key])
 
+    geometry = _measured_geometry(uv, tt.sigma_px, kf, kr, cf, s, s_sig, sil, car)
+
     overlay = {
         "frame": ref,
         "tapes": [np.asarray(tp.ends, float) for tp in est.tapes],
@@ -707,4 +737,4 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     return Tracks(t=t, channels=channels, sigma=sigma, events_ms=events, contact_frame=cf,
                   fps=fps, scale_m_per_px=float(s), scale_sigma=float(s_sig),
                   impact_speed_mps=float(v_imp), direction=int(d), notes=notes,
-                  contact_offset_s=float(tc - cf / fps), overlay=overlay)
+                  contact_offset_s=float(tc - cf / fps), overlay=overlay, geometry=geometry)

@@ -88,6 +88,12 @@ class Tracks:
         What the tracking report draws on the reference frame, px: ``frame`` (index),
         ``tapes`` (list of (2, 2) end points), ``targets_uv`` (K, 2), ``target_kinds``
         (K,), ``silhouette_px`` (N, 2) or None, ``cg_uv`` (2,).
+    geometry : dict
+        The car's dimensions as the film shows them (at the tape's scale), m, each with
+        its one-sigma uncertainty, for checking the vehicle file: ``hub_spacing_m`` and
+        ``hub_spacing_sigma_m`` (the hub targets' distance before contact: the
+        wheelbase), ``outline_length_m`` and ``outline_length_sigma_m`` (the fitted
+        silhouette's length). A key is absent when not measured.
     """
 
     t: np.ndarray
@@ -103,3 +109,4 @@ class Tracks:
     notes: list = field(default_factory=list)
     contact_offset_s: float = 0.0
     overlay: dict = field(default_factory=dict)
+    geometry: dict = field(default_factory=dict)

@@ -27,6 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=None, help="results folder (default: <video stem>.identify/ beside it)")
     p.add_argument("--no-discover", action="store_true", help="fit the base model only")
     p.add_argument("--starts", type=int, default=5, help="starting points of the fit (default 5)")
+    p.add_argument("--force", action="store_true",
+                   help="fit even when the film contradicts the vehicle file (wheelbase, length); the result "
+                   "and report then carry the warning")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     p.set_defaults(func=run)
 
@@ -39,6 +42,21 @@ def run(args: argparse.Namespace) -> int:
     if not 1 <= args.starts <= 50:
         raise UserError(f"--starts must be in 1..50, got {args.starts}")
 
+    from identify.results import ResultsFolder, default_output_folder
+
+    if not args.recording.exists():
+        raise UserError(f"{args.recording} does not exist")
+    # the results' temporary sibling is made before anything heavy loads: an unwritable
+    # place fails within the first second
+    folder = ResultsFolder(args.out if args.out is not None else default_output_folder(args.recording))
+    try:
+        return _run(args, folder)
+    except BaseException:
+        folder.discard()
+        raise
+
+
+def _run(args: argparse.Namespace, folder) -> int:
     import dataclasses
 
     import identify
@@ -56,10 +74,11 @@ def run(args: argparse.Namespace) -> int:
         fps=args.fps,
         tape_segment=args.tape_segment,
         speed_kmh=args.speed,
-        out=args.out,
+        out=folder,
         discover=not args.no_discover,
         options=dataclasses.replace(FitOptions(), starts=args.starts),
         progress=progress,
+        force=args.force,
     )
     doc = ident.document
     print(f"{doc['vehicle_name']}, {doc['impact_speed_kmh']:.2f} km/h, fit RMS {1e3 * doc['fit']['rms_m']:.2f} mm")
@@ -67,5 +86,7 @@ def run(args: argparse.Namespace) -> int:
         std = f" +- {p['std']:.3g}" if p.get("std") is not None else ""
         flag = "" if p.get("identified", True) else f"   ({p['reason']})"
         print(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
+    for warning in doc.get("warnings") or []:
+        print(f"warning: {warning}", file=sys.stderr)
     print(f"results: {ident.out}")
     return 0

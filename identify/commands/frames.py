@@ -39,57 +39,84 @@ def run(args: argparse.Namespace) -> int:
     temporary folder that is renamed into place at the end, so an interrupted run never
     leaves a half-filled output folder.
     """
-    import shutil
     import sys
     from pathlib import Path
+
+    from identify.errors import UserError
+
+    if args.every < 1:
+        raise UserError(f"--every must be a positive whole number, got {args.every}")
+    from identify.results import make_temp_dir, remove_temp
+
+    out = Path(args.out)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise UserError(f"output folder {out} already exists and is not empty; choose another --out or remove it")
+    # the temporary sibling is made before any work: an unwritable place fails now
+    tmp = make_temp_dir(out.parent, out.name)
+    try:
+        written = _write_frames(args, out, tmp)
+    except BaseException:
+        remove_temp(tmp)
+        raise
+    if not args.quiet:
+        print(f"frames: wrote {written} image(s) to {out}", file=sys.stderr)
+    return 0
+
+
+def _write_frames(args, out, tmp) -> int:
+    import sys
 
     import cv2
 
     from identify.errors import UserError
+    from identify.results import _unregister
     from video.io import open_film
 
-    if args.every < 1:
-        raise UserError(f"--every must be a positive whole number, got {args.every}")
-    out = Path(args.out)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise UserError(f"output folder {out} already exists and is not empty; choose another --out or remove it")
     film = open_film(args.video, fps=args.fps)
     source = film.as_color() if film.is_color else film  # images keep the film's colours
-    progress = (lambda msg: print(f"\r{msg}", file=sys.stderr, end="", flush=True)) if not args.quiet else (lambda msg: None)
+    tty = sys.stderr.isatty()
+    shown = {"tenth": -1}
+
+    def progress(done: int, total: int) -> None:
+        if args.quiet:
+            return
+        if tty:  # one line redrawn on a terminal; whole lines every 10 % into a file or pipe
+            print(f"\rframes: {done}/{total}", file=sys.stderr, end="", flush=True)
+        elif int(10 * done / total) > shown["tenth"]:
+            shown["tenth"] = int(10 * done / total)
+            print(f"frames: {done}/{total}", file=sys.stderr, flush=True)
 
     draw = None
     if args.scaled:
         draw = _scaled_drawer(film, args)
 
-    tmp = out.with_name(out.name + ".partial")
-    if tmp.exists():
-        shutil.rmtree(tmp)
-    tmp.mkdir(parents=True)
     digits = max(5, len(str(film.n_frames - 1)))
     written = 0
-    try:
-        for i, frame in enumerate(source):
-            if i % args.every:
-                continue
-            image = draw(i, frame) if draw is not None else frame
-            name = tmp / f"frame_{i:0{digits}d}.png"
-            if not cv2.imwrite(str(name), image):
-                raise UserError(f"cannot write {name}; check that the disk has space and the folder is writable")
-            written += 1
-            progress(f"frames: {i + 1}/{film.n_frames}")
-        if not args.quiet:
-            print(file=sys.stderr)
-        for note in film.notes:
-            print(f"note: {note}", file=sys.stderr)
+    for i, frame in enumerate(source):
+        if i % args.every:
+            continue
+        image = draw(i, frame) if draw is not None else frame
+        name = tmp / f"frame_{i:0{digits}d}.png"
+        if not cv2.imwrite(str(name), image):
+            raise UserError(f"cannot write {name}; check that the disk has space and the folder is writable")
+        written += 1
+        progress(i + 1, film.n_frames)
+    if not args.quiet and tty:
+        print(file=sys.stderr)
+    for note in film.notes:
+        print(f"note: {note}", file=sys.stderr)
+    from identify.results import _LOCK, current_umask
+
+    mask = current_umask()
+    tmp.chmod(0o777 & ~mask)
+    for f in tmp.iterdir():
+        f.chmod(0o666 & ~mask)
+    with _LOCK:
         if out.exists():
             out.rmdir()
         tmp.rename(out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    if not args.quiet:
-        print(f"frames: wrote {written} image(s) to {out}", file=sys.stderr)
-    return 0
+        _unregister(tmp)
+    return written
 
 
 def _scaled_drawer(film, args):

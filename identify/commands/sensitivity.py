@@ -191,8 +191,13 @@ def load_result(result_dir: Path, speed_kmh, notes):
     path = result_dir / "result.json"
     if not path.is_file():
         raise UserError(f"{result_dir}: no result.json in it (run 'identify fit' first, or give --vehicle and --params)")
+    from sim._text import read_text
+
+    text = read_text(path, "results file", error=UserError)
     try:
-        doc = json.loads(path.read_text())
+        doc = json.loads(text)
+    except RecursionError:
+        raise UserError(f"{path}: not valid JSON (nested too deeply)") from None
     except json.JSONDecodeError as err:
         raise UserError(f"{path}: not valid JSON ({err.msg}, line {err.lineno})") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("parameters"), dict):
@@ -285,31 +290,6 @@ def _jsonable(value):
     return value
 
 
-def _write_folder_atomic(out: Path, write) -> None:
-    """Call ``write(tmp_folder)`` then move the folder to ``out`` (replacing an old one only
-    once the new one is complete)."""
-    import os
-    import shutil
-    import tempfile
-
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)
-    try:
-        write(tmp)
-        if out.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=out.parent))
-            os.replace(out, old / "x")
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-
-
 def _csv_rows(local, spread, sobol, units):
     import csv
     import io
@@ -387,22 +367,37 @@ def _intervals_csv(summary, units):
 
 
 def run(args: argparse.Namespace) -> int:
-    import jax
+    from identify.results import SENSITIVITY_FILES, ResultsFolder
 
-    jax.config.update("jax_enable_x64", True)
-    import dataclasses
-    import json
-    import sys
-
-    from identify import comparison as cmp
-    from identify import sensitivity as sens
-    from sim import FrontWheelBlock, load_params, load_vehicle, n_samples
-
-    # ---- check every option before any work
     if args.result_dir is not None and (args.vehicle or args.params):
         raise UserError("give either RESULT_DIR or --vehicle and --params, not both")
     if args.result_dir is None and not (args.vehicle and args.params):
         raise UserError("give a results folder (RESULT_DIR) or both --vehicle and --params")
+    if args.result_dir is not None and not args.result_dir.is_dir():
+        raise UserError(f"{args.result_dir}: no such results folder")
+    if args.out is None:
+        out = (args.result_dir / "sensitivity") if args.result_dir is not None else Path(
+            f"{Path(args.vehicle).stem}_{Path(args.params).stem}.sensitivity")
+    else:
+        out = args.out
+    # the output's temporary sibling is made before anything heavy loads: an unwritable
+    # place fails within the first second
+    folder = ResultsFolder(out, command="sensitivity", names=SENSITIVITY_FILES, marker="sensitivity.json",
+                           kind="sensitivity")
+    try:
+        return _checked_run(args, folder)
+    except BaseException:
+        folder.discard()
+        raise
+
+
+def _checked_run(args, folder) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from identify import sensitivity as sens
+
+    # ---- check every option before any work
     if args.speed is not None and not (math.isfinite(args.speed) and 0 < args.speed <= 360):
         raise UserError(f"--speed must be in (0, 360] km/h, got {args.speed}")
     if not (math.isfinite(args.duration_ms) and 100 <= args.duration_ms <= 2000):
@@ -416,17 +411,19 @@ def run(args: argparse.Namespace) -> int:
     for name in args.fix:
         if name not in sens.INPUTS:
             raise UserError(f"--fix {name!r}: unknown input; known: {', '.join(sens.INPUTS)}")
-    if args.result_dir is not None and not args.result_dir.is_dir():
-        raise UserError(f"{args.result_dir}: no such results folder")
-    if args.out is None:
-        out = (args.result_dir / "sensitivity") if args.result_dir is not None else Path(
-            f"{Path(args.vehicle).stem}_{Path(args.params).stem}.sensitivity")
-    else:
-        out = args.out
-    if not out.parent.is_dir():
-        raise UserError(f"--out: folder {out.parent} does not exist")
-    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / "sensitivity.json").is_file())):
-        raise UserError(f"--out: {out} exists and is not a sensitivity folder; choose another --out")
+    return _run(args, folder, ranges, times)
+
+
+def _run(args, folder, ranges, times) -> int:
+    import dataclasses
+    import json
+    import sys
+
+    from identify import comparison as cmp
+    from identify import sensitivity as sens
+    from sim import FrontWheelBlock, load_params, load_vehicle, n_samples
+
+    out = folder.out
 
     notes: list[str] = []
     duration = args.duration_ms / 1000.0
@@ -540,7 +537,8 @@ def run(args: argparse.Namespace) -> int:
         cmp.plot_histories(run_id, run_def, labels, folder / "comparison_histories.png", title=title)
         cmp.plot_silhouettes(vehicle, run_id, run_def, labels, folder / "comparison_silhouettes.png", title=title)
 
-    _write_folder_atomic(out, write)
+    with folder as tmp:
+        write(tmp)
     say(_summary_table(local, summary, uncertainty.spread(), units))
     s = summary["max_crush"]
     if "interval_90" in s:

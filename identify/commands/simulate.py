@@ -28,11 +28,40 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="add front-wheel blocking when the crush reaches the tyre (front overhang minus wheel radius)",
     )
-    p.add_argument("--out", type=Path, default=None, help="CSV file to write (default: stdout)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="CSV file to write (default: stdout); an existing file is replaced only when it is a CSV "
+                   "this command wrote, unless --force")
+    p.add_argument("--force", action="store_true", help="replace --out even when it is not one of our CSVs")
     p.set_defaults(func=run)
 
 
 DEFAULT_SPEED_KMH = 56.3
+
+
+def is_our_csv(path: Path) -> bool:
+    """True when ``path`` starts with the header line ``identify simulate`` writes."""
+    from identify.trajectory_csv import COLUMNS
+
+    try:
+        with open(path, "rb") as f:
+            head = f.read(4096).split(b"\n", 1)[0]
+    except OSError:
+        return False
+    return head.decode("ascii", "replace").startswith(",".join(c[0] for c in COLUMNS))
+
+
+def check_simulate_out(out: Path, force: bool) -> None:
+    """Refuse, before simulating, an --out that names a folder, an unwritable place, or a
+    file that is not one of our CSVs (unless ``force``)."""
+    from identify.results import check_writable_file
+
+    check_writable_file(out)
+    if out.exists() and not force:
+        if not out.is_file():
+            raise UserError(f"--out: {out} exists and is not a file; choose another --out")
+        if not is_our_csv(out):
+            raise UserError(f"--out: {out} exists and is not a CSV written by 'identify simulate'; "
+                            "choose another name, or --force to replace it")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -51,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--speed must be in (0, 360] km/h, got {args.speed}")
     if not (math.isfinite(args.duration_ms) and 1 <= args.duration_ms <= 10000):
         raise UserError(f"--duration-ms must be in [1, 10000], got {args.duration_ms}")
-    if args.out is not None and not args.out.parent.is_dir():
-        raise UserError(f"--out: folder {args.out.parent} does not exist")
+    if args.out is not None:
+        check_simulate_out(args.out, args.force)
 
     vehicle = load_vehicle(args.vehicle)
     params = load_params(args.params)

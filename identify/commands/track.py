@@ -7,10 +7,7 @@ Reads a film, measures the car's motion (``video.track.track_film``) and writes
 from __future__ import annotations
 
 import argparse
-import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 from identify.errors import UserError
@@ -34,8 +31,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="impact speed in km/h if known (default: measured)")
     p.add_argument("--out", default=None,
                    help="results folder (default: <video stem>.identify/ beside the video)")
+    p.add_argument("--force", action="store_true",
+                   help="write the tracks even when the film contradicts the vehicle file (wheelbase, length)")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=run)
+
+
+def _check_vehicle(tracks, args) -> list[str]:
+    """The film's wheelbase and length against the vehicle file's (``identify.consistency``)."""
+    from identify.consistency import check_film_against_vehicle
+    from identify.identification import vehicle_label
+    from sim import load_vehicle
+
+    return check_film_against_vehicle(tracks, load_vehicle(args.vehicle), vehicle_label(args.vehicle),
+                                      force=args.force, verb="track")
 
 
 def load_car_geometry(name_or_path: str):
@@ -77,6 +86,7 @@ def _progress(quiet: bool):
 
 def run(args: argparse.Namespace) -> int:
     """Track the film ``args.video`` and write tracks.csv + report; return 0."""
+    from identify.results import RESULT_FILE, TRACK_FILES, ResultsFolder
     from video.io import open_film
     from video.report import write_report, write_tracks_csv
     from video.track import track_film
@@ -92,29 +102,21 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--speed must be positive (km/h), got {args.speed}")
     car = load_car_geometry(args.vehicle)
     out = Path(args.out) if args.out else video.parent / f"{video.stem}.identify"
-
-    film = open_film(str(video), fps=args.fps)
-    tracks = track_film(
-        film, car, tape_segment_m=args.tape_segment,
-        speed_mps=None if args.speed is None else args.speed / 3.6,
-        progress=_progress(args.quiet),
-    )
-
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    try:
+    # the results' temporary sibling is made before any work: an unwritable place fails now;
+    # files of other stages (result.json ...) already there are kept
+    folder = ResultsFolder(out, command="track", names=TRACK_FILES, marker=RESULT_FILE, adopt_legacy=False)
+    with folder as tmp:
+        film = open_film(str(video), fps=args.fps)
+        tracks = track_film(
+            film, car, tape_segment_m=args.tape_segment,
+            speed_mps=None if args.speed is None else args.speed / 3.6,
+            progress=_progress(args.quiet),
+        )
+        warnings = _check_vehicle(tracks, args)
         write_tracks_csv(tracks, tmp / "tracks.csv")
         write_report(tracks, tmp, film=film, car=car)
-        if out.exists():
-            # keep files of other stages (result.json ...) that are already there
-            for f in tmp.iterdir():
-                os.replace(f, out / f.name)
-            shutil.rmtree(tmp)
-        else:
-            os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
     if not args.quiet:
         print(f"wrote {out / 'tracks.csv'} and {out / 'tracking_report.png'}", file=sys.stderr)
         print(f"contact frame {tracks.contact_frame}, impact speed "

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from identify.errors import UserError
+from sim._text import read_text
 from identify.recordings.motion import G0, Channel, SensorTest
 
 __all__ = ["read_isomme", "write_isomme", "parse_info", "find_mme", "is_vehicle_motion",
@@ -81,9 +82,12 @@ def _number(info, key, path) -> float | None:
     if v is None:
         return None
     try:
-        return float(v)
+        value = float(v)
     except ValueError:
         raise UserError(f"{path}: {key!r} is {v!r}, not a number") from None
+    if not np.isfinite(value):
+        raise UserError(f"{path}: {key!r} is {v!r}, not a finite number")
+    return value
 
 
 def find_mme(path: str | Path) -> Path:
@@ -104,8 +108,11 @@ def _find_ci(folder: Path, name: str) -> Path | None:
     if not folder.is_dir():
         return None
     exact = folder / name
-    if exact.exists():
-        return exact
+    try:
+        if exact.exists():
+            return exact
+    except OSError:  # a name too long for the file system
+        return None
     for q in folder.iterdir():
         if q.name.lower() == name.lower():
             return q
@@ -132,7 +139,7 @@ def is_barrier_force(code: str) -> bool:
 
 
 def _read_channel(path: Path, code: str, label: str) -> tuple[dict[str, str], np.ndarray, np.ndarray]:
-    lines = path.read_text(encoding="latin-1").splitlines()
+    lines = read_text(path, "ISO-MME channel file", encoding="latin-1", error=UserError).splitlines()
     info, end = parse_info(lines, path)
     try:
         values = np.array([float(s) if s.strip().upper() != "NOVALUE" else np.nan
@@ -180,7 +187,7 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
     >>> test = read_isomme("10146/10146.mme")  # doctest: +SKIP
     """
     mme = find_mme(path)
-    info, _ = parse_info(mme.read_text(encoding="latin-1").splitlines(), mme)
+    info, _ = parse_info(read_text(mme, "ISO-MME file", encoding="latin-1", error=UserError).splitlines(), mme)
     number = _value(info, "Laboratory test ref. number") or mme.stem
     speed = _number(info, "Velocity test object 1", mme)
     if speed is None or speed <= 0:
@@ -190,7 +197,7 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
     chn = _find_ci(chdir, f"{mme.stem}.chn") if chdir else None
     if chn is None:
         raise UserError(f"{mme}: no channel list Channel/{mme.stem}.chn beside it")
-    chinfo, _ = parse_info(chn.read_text(encoding="latin-1").splitlines(), chn)
+    chinfo, _ = parse_info(read_text(chn, "ISO-MME channel list", encoding="latin-1", error=UserError).splitlines(), chn)
     entries = []
     for key, val in chinfo.items():
         m = re.fullmatch(r"name of channel (\d+)", key)
@@ -279,6 +286,9 @@ def write_isomme(test: SensorTest, folder: str | Path, number: str = "TEST") -> 
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".isomme-", dir=folder.parent))
     try:
+        from identify.results import current_umask
+
+        os.chmod(tmp, 0o777 & ~current_umask())  # mkdtemp's 0700 would hide it from colleagues
         (tmp / "Channel").mkdir()
         mme = [f"{'Data format edition number':<28}:1.6",
                f"{'Laboratory test ref. number':<28}:{number}",

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from identify.errors import UserError
+from sim._text import read_text
 from identify.recordings.motion import G0, Channel, SensorTest
 
 __all__ = ["Ev5Channel", "Ev5Header", "read_ev5_header", "load_ev5_channel",
@@ -156,16 +157,19 @@ def _sections(lines: list[str], path: Path) -> dict[str, list[list[str]]]:
 
 def _float(text: str, what: str, path: Path) -> float:
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise UserError(f"{path}: {what} is {text!r}, not a number") from None
+    if not np.isfinite(value):
+        raise UserError(f"{path}: {what} is {text!r}, not a finite number")
+    return value
 
 
 def _channel_row(row: list[str], path: Path, lineno: int) -> Ev5Channel:
     if len(row) < 20:
         raise UserError(f"{path}: INSTRUMENTATION row {lineno} has {len(row)} fields, an EV5 channel row has 20")
     try:
-        return Ev5Channel(
+        ch = Ev5Channel(
             vehicle=int(row[0]), curve=int(row[1]), sensor_type=row[2].strip(),
             location=row[3].strip(), attachment=row[4].strip(), axis=row[5].strip(),
             units=row[7].strip(), first_sample=int(row[14]), last_sample=int(row[15]),
@@ -175,6 +179,10 @@ def _channel_row(row: list[str], path: Path, lineno: int) -> Ev5Channel:
         raise UserError(
             f"{path}: INSTRUMENTATION row {lineno} ({'|'.join(row[:6])}...) has a non-numeric "
             f"vehicle, curve, sample or interval field") from None
+    if not (np.isfinite(ch.dt) and ch.dt > 0) or ch.curve < 0 or ch.n_samples < 1:
+        raise UserError(f"{path}: INSTRUMENTATION row {lineno} ({'|'.join(row[:6])}...) needs a positive sample "
+                        "interval, a curve number >= 0 and last sample >= first sample")
+    return ch
 
 
 def read_ev5_header(path: str | Path) -> Ev5Header:
@@ -190,10 +198,7 @@ def read_ev5_header(path: str | Path) -> Ev5Header:
     Ev5Header
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="latin-1")
-    except OSError as err:
-        raise UserError(f"cannot read {path}: {err.strerror}") from None
+    text = read_text(path, "EV5 header", encoding="latin-1", error=UserError)
     sec = _sections(text.splitlines(), path)
     for name in ("TEST", "INSTRUMENTATION"):
         if not sec.get(name):
@@ -233,9 +238,14 @@ def load_ev5_channel(header: Ev5Header, ch: Ev5Channel) -> tuple[np.ndarray, np.
         disagrees with the header (sample interval, first sample, number of samples).
     """
     p = header.channel_path(ch)
-    if not p.exists():
+    try:
+        found = p.is_file()
+    except OSError:  # a name too long for the file system
+        found = False
+    if not found:
         raise UserError(f"missing channel file {p.name} for {ch.label()}: it must lie beside {header.path.name}")
-    lines = [ln for ln in p.read_text(encoding="latin-1").splitlines() if ln.strip()]
+    lines = [ln for ln in read_text(p, "EV5 channel file", encoding="latin-1", error=UserError).splitlines()
+             if ln.strip()]
     tokens = " ".join(lines).split()
     if len(tokens) != 2 * len(lines) or len(lines) < 2:
         raise UserError(f"{p}: a channel file must hold two columns (time in s, value) on every line")
