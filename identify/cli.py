@@ -16,7 +16,7 @@ import sys
 
 from identify.errors import UserError
 
-COMMANDS = ("fit", "track", "frames", "simulate", "sensitivity", "vehicles")
+COMMANDS = ("fit", "track", "frames", "simulate", "sensitivity", "vehicles", "synth")
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL_ERROR = 1  # a bug: still one line, never a traceback (IDENTIFY_DEBUG=1 shows it)

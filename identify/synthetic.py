@@ -1,8 +1,9 @@
 """Synthetic crash films with known truth: vehicle file -> CarGeometry, trajectory ->
-film (``video.render``), and, with the collision model, simulate-and-render.
+film (``synth.render``, the reference world's renderer), and, with the collision model,
+simulate-and-render.
 
-This lives in ``identify`` (not ``video``) because it reads vehicle files and calls
-``sim``; ``video`` itself knows neither.
+This lives in ``identify`` (not ``synth`` or ``video``) because it calls ``sim``; ``video``
+reads footage and never makes it, and ``synth`` never imports ``sim``.
 
 Example
 -------
@@ -66,6 +67,29 @@ def car_geometry(vehicle: dict) -> CarGeometry:
     else:
         top = sil[np.argmax(sil[:, 1])]
     return CarGeometry(silhouette_side=sil, windscreen_top=top, **values)
+
+
+def reference_car(vehicle):
+    """The renderer's car (:class:`synth.vehicle.Car`) of a vehicle name, TOML path or
+    parsed TOML dict; a car object (``Car`` or ``CarGeometry``) is returned as it is, and
+    so is the geometry of a dict that has only the dimensions the film needs.
+
+    Raises
+    ------
+    UserError
+        Unknown vehicle, or a file that is not a valid vehicle.
+    """
+    from synth.vehicle import SynthError, car_from_dict
+
+    if isinstance(vehicle, (str, Path)):
+        vehicle = load_vehicle_dict(vehicle)
+    if not isinstance(vehicle, dict):
+        return vehicle
+    geometry = car_geometry(vehicle)  # the same checks and messages as the video stage's
+    try:
+        return car_from_dict(vehicle, str(vehicle.get("name", "vehicle file")))
+    except SynthError:
+        return geometry  # no mass, inertia ...: the renderer needs only the geometry
 
 
 def load_vehicle_dict(name_or_path: str | Path) -> dict:
@@ -175,9 +199,9 @@ def render_crash(vehicle, trajectory, out_path: str | Path, *, frames_before: in
 
     Parameters
     ----------
-    vehicle : str, Path, dict or CarGeometry
-        A name from ``data/vehicles``, a vehicle TOML path, a parsed TOML dict, or a
-        CarGeometry.
+    vehicle : str, Path, dict, synth.vehicle.Car or CarGeometry
+        A name from ``data/vehicles``, a vehicle TOML path, a parsed TOML dict, or a car
+        (anything with the geometry of :class:`synth.vehicle.Car`).
     trajectory : mapping or object with fields ``t, x, z, pitch, front_wheel_angle,
         rear_wheel_angle`` (and optionally ``crush``), each (n,), sampled at a constant
         step from ``t = 0`` at first contact (SI units, pitch nose-down positive), e.g. a
@@ -196,7 +220,7 @@ def render_crash(vehicle, trajectory, out_path: str | Path, *, frames_before: in
         Scale in the car plane; default: the scene fits the width.
     direction : int
         +1 left-to-right, -1 right-to-left.
-    effects : video.scene.Effects, optional
+    effects : synth.scene.Effects, optional
     container_fps : float, optional
         Rate written into the container (default the true rate).
     wheels_on_floor : bool
@@ -207,9 +231,9 @@ def render_crash(vehicle, trajectory, out_path: str | Path, *, frames_before: in
     tape_segment : float
         Checker-tape segment length, m.
     occluders, duplicate : tuple
-        See :class:`video.scene.Occluder` and :func:`video.render.write_film`.
+        See :class:`synth.scene.Occluder` and :func:`synth.render.write_film`.
     camera_kwargs : dict, optional
-        Other :class:`video.scene.Camera` fields (distances, k1, k2).
+        Other :class:`synth.scene.Camera` fields (distances, k1, k2, yaw, pitch, roll ...).
     barrier_target : bool
         Add a fixed quadrant target (0.12 m) on the barrier's side face, 0.2 m past its
         face and 1.0 m above the floor.
@@ -219,16 +243,10 @@ def render_crash(vehicle, trajectory, out_path: str | Path, *, frames_before: in
     dict
         Film-level truth (contact frame, impact speed, m/px ...).
     """
-    from video.render import Renderer, write_film
-    from video.scene import Effects, Motion, Scene, Target, body_to_plane, default_camera, default_tapes, default_targets
-    from video.types import CarGeometry as _CG
+    from synth.render import Renderer, write_film
+    from synth.scene import Effects, Motion, Scene, Target, body_to_plane, default_camera, default_tapes, default_targets
 
-    if isinstance(vehicle, _CG):
-        car = vehicle
-    elif isinstance(vehicle, dict):
-        car = car_geometry(vehicle)
-    else:
-        car = car_geometry(load_vehicle_dict(vehicle))
+    car = reference_car(vehicle)
     arr = {}
     for name in ("t", "x", "z", "pitch", "front_wheel_angle", "rear_wheel_angle", "crush"):
         v = _field(trajectory, name)
@@ -323,7 +341,7 @@ def simulate_and_render(vehicle: str = "audi_a4", params: str = "paper_identifie
     traj = simulate(p, veh, speed=v0, duration=duration)
     arrays = {name: np.asarray(getattr(traj, name)) for name in TRAJECTORY_FIELDS + ("front_margin", "rear_margin")}
     render_crash(vehicle, arrays, out_path, speed=v0, **render_kwargs)
-    from video.render import update_truth
+    from synth.render import update_truth
 
     events = {k: (None if v is None else float(v)) for k, v in events_ms(traj).items()}
     return update_truth(out_path, {"vehicle": str(vehicle), "params": str(params),

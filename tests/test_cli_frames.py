@@ -8,8 +8,8 @@ import pytest
 
 from identify.cli import main
 from identify.synthetic import car_geometry, load_vehicle_dict
-from video.render import Renderer, write_film
-from video.scene import Effects, Motion, Scene, default_camera, default_tapes, default_targets
+from synth.render import Renderer, write_film
+from synth.scene import Effects, Motion, Scene, default_camera, default_tapes, default_targets
 
 CAR = car_geometry(load_vehicle_dict("audi_a4"))
 

@@ -12,8 +12,8 @@ import pytest
 
 from identify.cli import main
 from identify.synthetic import car_geometry
-from video.render import Renderer, write_film
-from video.scene import Motion, Scene, default_camera, default_tapes, default_targets
+from synth.render import Renderer, write_film
+from synth.scene import Motion, Scene, default_camera, default_tapes, default_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -189,8 +189,8 @@ def test_estimate_lens_without_points_says_not_corrected():
 
 def _render(direction=1, seg=0.1, size=(640, 480), k1=0.0, noise=2.0, car_name="audi_a4"):
     from identify.synthetic import car_geometry, load_vehicle_dict
-    from video.render import Renderer
-    from video.scene import (Effects, Motion, Scene, default_camera, default_tapes,
+    from synth.render import Renderer
+    from synth.scene import (Effects, Motion, Scene, default_camera, default_tapes,
                              default_targets)
     car = car_geometry(load_vehicle_dict(car_name))
     cam = default_camera(car, 0.0, width=size[0], height=size[1], k1=k1)
@@ -225,7 +225,7 @@ def test_scale_and_lens_on_rendered_frame_with_distortion(k1):
 
 @pytest.mark.parametrize("direction", [1, -1])
 def test_silhouette_fit_on_rendered_frame(direction):
-    from video.scene import body_to_plane, project
+    from synth.scene import body_to_plane, project
     img, car, cam, r = _render(direction, 0.1, (640, 480))
     sil = fit_silhouette(img, car)  # no scale hint: searched over a wide range
     assert sil.direction == direction

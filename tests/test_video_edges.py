@@ -197,8 +197,8 @@ def film():
     """A short rendered crash: 8 frames of approach at 15.6 m/s, then 14 of crush with
     the nose pitching down to 0.05 rad."""
     from identify.synthetic import car_geometry, load_vehicle_dict
-    from video.render import Renderer
-    from video.scene import (Effects, Motion, Scene, default_camera, default_tapes,
+    from synth.render import Renderer
+    from synth.scene import (Effects, Motion, Scene, default_camera, default_tapes,
                              default_targets)
     car = car_geometry(load_vehicle_dict("audi_a4"))
     cam = default_camera(car, 0.0, width=640, height=480)
@@ -220,7 +220,7 @@ def film():
 
 
 def _truth_uv(r, car, cam, pts, i, direction):
-    from video.scene import body_to_plane, project
+    from synth.scene import body_to_plane, project
     return project(cam, body_to_plane(pts, car, r.pose(float(i)), r.x_cg0), cam.distance_car,
                    direction)
 
@@ -229,7 +229,7 @@ def _truth_uv(r, car, cam, pts, i, direction):
 @pytest.mark.parametrize("direction", [1, -1])
 def test_roof_edge_front_end_and_crush_on_rendered_film(film, direction):
     from video.calibrate import fit_silhouette, measure_scale
-    from video.scene import front_x
+    from synth.scene import front_x
     car, cam, n0, out = film
     r, frames = out[direction]
     est = measure_scale(frames[0], 0.1)

@@ -10,8 +10,8 @@ import pytest
 from identify.synthetic import car_geometry, load_vehicle_dict
 from video.errors import VideoError
 from video.io import open_film
-from video.render import Renderer, write_film
-from video.scene import Effects, Motion, Scene, default_camera, default_tapes, default_targets
+from synth.render import Renderer, write_film
+from synth.scene import Effects, Motion, Scene, default_camera, default_tapes, default_targets
 
 CAR = car_geometry(load_vehicle_dict("vw_golf_7"))
 

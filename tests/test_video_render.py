@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from identify.synthetic import car_geometry, load_vehicle_dict
-from video.errors import VideoError
-from video.render import Renderer, read_truth, write_film
-from video.scene import (
+from synth.vehicle import SynthError
+from synth.render import Renderer, read_truth, write_film
+from synth.scene import (
     Effects,
     Motion,
     Occluder,
@@ -244,7 +244,7 @@ def test_render_crash_prepends_a_constant_speed_approach(tmp_path):
     render_crash("audi_a4", traj, tmp_path / "f", frames_before=2, width=320, height=160, barrier_target=True)
     _, cols = read_truth(tmp_path / "f")
     assert np.ptp(cols["barrier_u_px"]) == 0.0 and np.ptp(cols["door_u_px"]) > 5.0
-    with pytest.raises(VideoError, match="already holds frames"):
+    with pytest.raises(SynthError, match="already holds frames"):
         render_crash("audi_a4", traj, tmp_path / "f", frames_before=2, width=320, height=160)
     # without a given speed, the approach speed is the trajectory's initial velocity
     meta = render_crash("audi_a4", traj, tmp_path / "e", frames_before=3, width=320, height=160)

@@ -1,4 +1,4 @@
-"""Tracking and motion on rendered crash films with known truth (video.render), and the
+"""Tracking and motion on rendered crash films with known truth (synth.render), and the
 motion functions on small synthetic series.
 
 The films are rendered in memory at 4 mm/px (1280 px wide, the whole Golf in view):
@@ -25,8 +25,8 @@ from video.motion import (
     lift_time,
     rigid_fit,
 )
-from video.render import Renderer
-from video.scene import Effects, Motion, Occluder, Scene, default_camera, default_tapes, \
+from synth.render import Renderer
+from synth.scene import Effects, Motion, Occluder, Scene, default_camera, default_tapes, \
     default_targets
 from video.targets import detect_targets
 from video.track import track_film, track_targets
@@ -310,7 +310,7 @@ def test_film_of_a_simulated_crash(identified_run, tmp_path):
     with open(ROOT / "data" / "vehicles" / "audi_a4.toml", "rb") as fh:
         car = car_geometry(tomllib.load(fh))
     tracks = track_film(open_film(path, fps=1000.0), car)
-    from video.render import read_truth
+    from synth.render import read_truth
 
     _, truth = read_truth(path)
     assert tracks.contact_frame == meta["contact_frame"]

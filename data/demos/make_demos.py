@@ -54,8 +54,8 @@ def make(name: str) -> dict:
     jax.config.update("jax_enable_x64", True)
     from identify.synthetic import TRAJECTORY_FIELDS, render_crash
     from sim import events_ms, load_vehicle, named_params, simulate
-    from video.render import update_truth
-    from video.scene import Effects
+    from synth.render import update_truth
+    from synth.scene import Effects
 
     vehicle = load_vehicle("audi_a4")
     mechanisms = hidden_mechanisms(DEMOS[name], vehicle)

@@ -20,7 +20,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent))
 
 from identify.synthetic import simulate_and_render  # noqa: E402
-from video.scene import Effects  # noqa: E402
+from synth.scene import Effects  # noqa: E402
 
 
 def main() -> None:

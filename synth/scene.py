@@ -2,22 +2,31 @@
 
 Frozen dataclasses only, plus the geometry the renderer and its truth share: where a
 body point is in the car plane for a pose (CONVENTIONS.md formula), and where a point of
-a plane at a given depth lands in the image (pinhole camera looking perpendicular to the
-car's side, optional radial distortion k1, k2).
+a plane parallel to the car's side at a given depth lands in the image: a pinhole camera
+with a small yaw, pitch and roll about its centre, an off-centre principal point and
+radial distortion k1, k2. Each such plane maps to the undistorted image by a homography
+(:meth:`Camera.homography`), so polygons stay polygons.
 
-Coordinates: car plane X (towards the barrier), Z (up from the floor), m; image u, v px
-with (0, 0) the centre of the top-left pixel; a film where the car moves right-to-left
-has X growing to the image's left (``direction = -1``).
+Coordinates: car plane X (towards the barrier), Z (up from the floor), m; depth D from
+the camera's centre along the normal of the car's side, m; image u, v px with (0, 0) the
+centre of the top-left pixel; a film where the car moves right-to-left has X growing to
+the image's left (``direction = -1``).
+
+``car`` arguments are :class:`synth.vehicle.Car` (or any object with the same geometry
+attributes: ``x_cg, front_axle_x, rear_axle_x, wheelbase, wheel_radius, cg_height,
+height, silhouette_side, windscreen_top``).
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
-from video.types import CarGeometry
+from synth.vehicle import Car, SynthError
 
 # ----------------------------------------------------------------------------- parts
 
@@ -27,9 +36,15 @@ class Target:
     """A quadrant target: a disc of ``diameter`` m split into four quadrants.
 
     ``kind`` is ``"body"`` (``x, z`` in the vehicle frame, moves with the body),
-    ``"front_hub"`` / ``"rear_hub"`` (on a wheel centre, turns with the wheel; ``x, z``
-    ignored) or ``"fixed"`` (``x, z`` are car-plane X, Z of a point on the barrier's side
-    face, which lies at the barrier's depth).
+    ``"deform"`` (on a part that deforms, bonnet or front wing: a body point that also
+    moves rearwards in the vehicle frame by ``follow`` times the crush and turns by
+    ``turn`` rad per m of crush), ``"front_hub"`` / ``"rear_hub"`` (on a wheel centre,
+    turns with the wheel; ``x, z`` ignored) or ``"fixed"`` (``x, z`` are car-plane X, Z of
+    a fixed point at depth ``depth``, default the barrier's side face).
+
+    ``angle`` turns the quadrant pattern in its plane (rad, e.g. pi/4 for a target stuck
+    on at 45 deg); ``dark`` / ``light`` override the scene's target greys (e.g. a
+    black/yellow target is dark 15, light about 200 in a grayscale film).
     """
 
     name: str
@@ -37,6 +52,12 @@ class Target:
     x: float = 0.0
     z: float = 0.0
     diameter: float = 0.1
+    angle: float = 0.0
+    depth: float | None = None
+    follow: float = 0.0
+    turn: float = 0.0
+    dark: int | None = None
+    light: int | None = None
 
 
 @dataclass(frozen=True)
@@ -53,19 +74,38 @@ class Tape:
     height: float = 0.03
 
 
+@functools.lru_cache(maxsize=256)
+def rotation_matrix(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """3x3 rotation of camera coordinates (x right, y down, z along the optical axis):
+    ``R = Rz(roll) @ Rx(pitch) @ Ry(yaw)``, angles in rad. A point with nominal camera
+    coordinates ``p`` is seen at ``R @ p``; a positive yaw moves the scene to the image's
+    right, a positive pitch moves it up, a positive roll turns it clockwise (v down)."""
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]])
+    Rz = np.array([[cr, -sr, 0.0], [sr, cr, 0.0], [0.0, 0.0, 1.0]])
+    R = Rz @ Rx @ Ry
+    R.flags.writeable = False  # cached: shared by every caller
+    return R
+
+
 @dataclass(frozen=True)
 class Camera:
-    """Pinhole camera looking perpendicular to the car's side.
+    """Pinhole camera whose nominal optical axis is perpendicular to the car's side,
+    turned about its centre by small ``yaw``, ``pitch`` and ``roll``.
 
     Attributes
     ----------
     width, height : int
         Image size, px.
     m_per_px : float
-        Scale in the car plane (at ``distance_car``), m/px; the focal length is
-        ``distance_car / m_per_px`` px.
+        Scale in the car plane (at ``distance_car``) on the nominal axis, m/px; the focal
+        length is ``distance_car / m_per_px`` px.
     centre_x, centre_z : float
-        Car-plane point on the optical axis, m.
+        Car-plane point on the nominal optical axis, m (the camera's centre is at that X
+        and height Z, ``distance_car`` from the car's side).
     distance_car : float
         Camera to car-side plane, m.
     distance_barrier : float
@@ -75,6 +115,11 @@ class Camera:
     k1, k2 : float
         Radial distortion of the normalised image coordinates, applied to the rendered
         image: ``x_d = x (1 + k1 r^2 + k2 r^4)``.
+    yaw, pitch, roll : float
+        Rotation of the camera about its centre, rad (:func:`rotation_matrix`); 0: the
+        optical axis is perpendicular to the car's side.
+    pp_du, pp_dv : float
+        Offset of the principal point from the image centre, px.
     """
 
     width: int = 640
@@ -87,6 +132,11 @@ class Camera:
     distance_background: float = 12.0
     k1: float = 0.0
     k2: float = 0.0
+    yaw: float = 0.0
+    pitch: float = 0.0
+    roll: float = 0.0
+    pp_du: float = 0.0
+    pp_dv: float = 0.0
 
     @property
     def focal_px(self) -> float:
@@ -95,11 +145,35 @@ class Camera:
 
     @property
     def principal_point(self) -> tuple[float, float]:
-        """(cx, cy) px: the image centre."""
-        return (self.width - 1) / 2.0, (self.height - 1) / 2.0
+        """(cx, cy) px: the image centre plus ``(pp_du, pp_dv)``."""
+        return (self.width - 1) / 2.0 + self.pp_du, (self.height - 1) / 2.0 + self.pp_dv
+
+    @property
+    def K(self) -> np.ndarray:
+        """3x3 intrinsic matrix."""
+        f = self.focal_px
+        cx, cy = self.principal_point
+        return np.array([[f, 0.0, cx], [0.0, f, cy], [0.0, 0.0, 1.0]])
+
+    def rotation(self) -> np.ndarray:
+        """3x3 rotation of the camera (:func:`rotation_matrix`)."""
+        return rotation_matrix(self.yaw, self.pitch, self.roll)
+
+    def homography(self, distance: float, direction: int, extra_rotation: np.ndarray | None = None) -> np.ndarray:
+        """3x3 homography from ``[X, Z, 1]`` of the plane at ``distance`` m (parallel to
+        the car's side) to homogeneous undistorted pixels; ``extra_rotation`` (3x3) turns
+        the camera further (camera shake)."""
+        M = np.array([[direction, 0.0, -direction * self.centre_x],
+                      [0.0, -1.0, self.centre_z],
+                      [0.0, 0.0, distance]])
+        R = self.rotation()
+        if extra_rotation is not None:
+            R = extra_rotation @ R
+        return self.K @ R @ M
 
     def scale_at(self, distance: float) -> float:
-        """m/px of a plane at ``distance`` m from the camera (undistorted)."""
+        """m/px of a plane at ``distance`` m from the camera (undistorted, on the nominal
+        axis)."""
         return distance / self.focal_px
 
 
@@ -138,6 +212,20 @@ class Effects:
         Number of debris particles thrown from the contact point after contact.
     seed : int
         Random seed of noise, flicker and debris (films are reproducible).
+    gain : float
+        Exposure gain applied before clipping at 255 (> 1: overexposed, light parts
+        saturate).
+    shake_px : float
+        Camera shake after contact: amplitude of the image translation, px (a rotation
+        of the camera about its centre, so every depth moves alike).
+    shake_hz : float
+        Shake frequency, Hz.
+    shake_decay_s : float
+        Time constant of the shake's exponential decay, s.
+    shake_angle : float
+        Direction of the shake's translation in the image, rad from the u axis.
+    shake_roll : float
+        Amplitude of the shake's roll, rad (at 1.37 times ``shake_hz``).
     """
 
     noise_sigma: float = 0.0
@@ -148,6 +236,12 @@ class Effects:
     jpeg_quality: int | None = None
     debris: int = 0
     seed: int = 0
+    gain: float = 1.0
+    shake_px: float = 0.0
+    shake_hz: float = 20.0
+    shake_decay_s: float = 0.05
+    shake_angle: float = 0.0
+    shake_roll: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -156,7 +250,7 @@ class Scene:
 
     Attributes
     ----------
-    car : CarGeometry
+    car : Car
     camera : Camera
     targets : tuple[Target, ...]
     tapes : tuple[Tape, ...]
@@ -171,9 +265,21 @@ class Scene:
         resolution and averaged down (anti-aliasing); targets are drawn analytically.
     body_grey, tyre_grey, rim_grey, barrier_grey, tape_dark, tape_light, target_dark, target_light : int
         Grey levels 0-255 of the parts.
+    wall_grey, wall_texture, floor_grey : float
+        Background: mean grey of the wall, amplitude of its smooth texture, floor grey.
+    texture_scale : float
+        Size of the wall texture's blobs, px.
+    tile_m : float
+        Spacing of the faint tile lines on the wall, m (0: none).
+    texture_seed : int
+        Seed of the background texture.
+    hubcap_grey : int or None
+        Draw a hubcap disc of this grey on each wheel (hubs without targets).
+    lamps : tuple of (X, Z, radius) m
+        Saturated lamps on the background wall.
     """
 
-    car: CarGeometry
+    car: Car
     camera: Camera
     targets: tuple = ()
     tapes: tuple = ()
@@ -190,6 +296,14 @@ class Scene:
     tape_light: int = 235
     target_dark: int = 15
     target_light: int = 245
+    wall_grey: float = 85.0
+    wall_texture: float = 14.0
+    floor_grey: float = 120.0
+    texture_scale: float = 14.0
+    tile_m: float = 0.5
+    texture_seed: int = 12345
+    hubcap_grey: int | None = None
+    lamps: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -236,7 +350,8 @@ class Motion:
 
     def at(self, f: float) -> dict:
         """Pose at a fractional frame index ``f``: dict with ``x, z, pitch,
-        front_wheel_angle, rear_wheel_angle, front_wheel_dz, rear_wheel_dz``.
+        front_wheel_angle, rear_wheel_angle, front_wheel_dz, rear_wheel_dz`` and
+        ``crush`` (None without ``self.crush``).
 
         Linear interpolation between frames, and linear extrapolation of the first and
         last intervals for sub-frame times outside the film (motion blur of the first
@@ -264,30 +379,31 @@ class Motion:
             "rear_wheel_angle": lerp(self.rear_wheel_angle),
             "front_wheel_dz": lerp(self.front_wheel_dz),
             "rear_wheel_dz": lerp(self.rear_wheel_dz),
+            "crush": None if self.crush is None else lerp(self.crush),
         }
 
 
 # -------------------------------------------------------------------------- geometry
 
 
-def front_x(car: CarGeometry) -> float:
+def front_x(car: Car) -> float:
     """Vehicle-frame x of the front-most silhouette point, m."""
     return float(np.max(np.asarray(car.silhouette_side)[:, 0]))
 
 
-def cg_x_at_contact(car: CarGeometry, x_barrier: float) -> float:
+def cg_x_at_contact(car: Car, x_barrier: float) -> float:
     """Car-plane X of the CG at first contact (bumper at the barrier face, pitch 0), m."""
     return x_barrier - (front_x(car) - car.x_cg)
 
 
-def body_to_plane(points: np.ndarray, car: CarGeometry, pose: dict, x_cg0: float) -> np.ndarray:
+def body_to_plane(points: np.ndarray, car: Car, pose: dict, x_cg0: float) -> np.ndarray:
     """Car-plane positions of vehicle-frame body points for a pose.
 
     Parameters
     ----------
     points : (N, 2) float
         Vehicle-frame points (x forward from the rear bumper, z up), m.
-    car : CarGeometry
+    car : Car
     pose : dict
         ``x, z, pitch`` (m, m, rad nose-down positive).
     x_cg0 : float
@@ -349,7 +465,8 @@ def clip_at_face(poly: np.ndarray, x_face: float) -> np.ndarray:
     return out
 
 
-def project(camera: Camera, XZ: np.ndarray, distance: float, direction: int, distort: bool = True) -> np.ndarray:
+def project(camera: Camera, XZ: np.ndarray, distance: float, direction: int, distort: bool = True,
+            extra_rotation: np.ndarray | None = None) -> np.ndarray:
     """Image position of points of a plane parallel to the car's side.
 
     Parameters
@@ -363,6 +480,8 @@ def project(camera: Camera, XZ: np.ndarray, distance: float, direction: int, dis
         +1 (X grows to the image's right) or -1.
     distort : bool
         Apply the camera's radial distortion.
+    extra_rotation : (3, 3) float, optional
+        A further rotation of the camera (camera shake), applied after its own.
 
     Returns
     -------
@@ -372,8 +491,14 @@ def project(camera: Camera, XZ: np.ndarray, distance: float, direction: int, dis
     XZ = np.asarray(XZ, dtype=float).reshape(-1, 2)
     f = camera.focal_px
     cx, cy = camera.principal_point
-    xn = direction * (XZ[:, 0] - camera.centre_x) / distance
-    yn = -(XZ[:, 1] - camera.centre_z) / distance
+    c = np.stack([direction * (XZ[:, 0] - camera.centre_x), -(XZ[:, 1] - camera.centre_z),
+                  np.full(len(XZ), float(distance))], axis=0)
+    R = camera.rotation()
+    if extra_rotation is not None:
+        R = extra_rotation @ R
+    if extra_rotation is not None or camera.yaw or camera.pitch or camera.roll:
+        c = R @ c
+    xn, yn = c[0] / c[2], c[1] / c[2]
     if distort and (camera.k1 or camera.k2):
         r2 = xn * xn + yn * yn
         g = 1.0 + camera.k1 * r2 + camera.k2 * r2 * r2
@@ -381,27 +506,26 @@ def project(camera: Camera, XZ: np.ndarray, distance: float, direction: int, dis
     return np.stack([cx + f * xn, cy + f * yn], axis=1)
 
 
-def unproject(camera: Camera, uv: np.ndarray, distance: float, direction: int) -> np.ndarray:
+def unproject(camera: Camera, uv: np.ndarray, distance: float, direction: int,
+              extra_rotation: np.ndarray | None = None) -> np.ndarray:
     """Inverse of :func:`project` without distortion: car-plane ``[X, Z]`` (N, 2) m of
     undistorted image points ``uv`` (N, 2) px on the plane at ``distance`` m."""
     uv = np.asarray(uv, dtype=float).reshape(-1, 2)
-    f = camera.focal_px
-    cx, cy = camera.principal_point
-    X = camera.centre_x + direction * (uv[:, 0] - cx) * distance / f
-    Z = camera.centre_z - (uv[:, 1] - cy) * distance / f
-    return np.stack([X, Z], axis=1)
+    Hi = np.linalg.inv(camera.homography(distance, direction, extra_rotation))
+    p = Hi @ np.vstack([uv.T, np.ones(len(uv))])
+    return (p[:2] / p[2]).T
 
 
 # ------------------------------------------------------------------ default layout
 
 
-def _inside(car: CarGeometry, x: float, z: float, margin: float) -> bool:
+def _inside(car: Car, x: float, z: float, margin: float) -> bool:
     poly = np.asarray(car.silhouette_side, dtype=np.float32)
     d = cv2.pointPolygonTest(poly.reshape(-1, 1, 2), (float(x), float(z)), True)
     return d >= margin
 
 
-def default_targets(car: CarGeometry, diameter: float = 0.1, hub_diameter: float = 0.12) -> tuple:
+def default_targets(car: Car, diameter: float = 0.1, hub_diameter: float = 0.12) -> tuple:
     """Quadrant targets where crash labs stick them: roof rail, B-pillar, door, sill,
     and one on each wheel hub.
 
@@ -411,7 +535,7 @@ def default_targets(car: CarGeometry, diameter: float = 0.1, hub_diameter: float
 
     Raises
     ------
-    ValueError
+    SynthError
         If a default position falls outside the silhouette (an unusual body shape:
         place the targets yourself).
     """
@@ -426,12 +550,12 @@ def default_targets(car: CarGeometry, diameter: float = 0.1, hub_diameter: float
     ]
     for t in body:
         if not _inside(car, t.x, t.z, 0.5 * t.diameter):
-            raise ValueError(f"default target {t.name} at ({t.x:.3f}, {t.z:.3f}) m is not inside the silhouette; give targets explicitly")
+            raise SynthError(f"default target {t.name} at ({t.x:.3f}, {t.z:.3f}) m is not inside the silhouette; give targets explicitly")
     hubs = [Target("front_hub", "front_hub", diameter=hub_diameter), Target("rear_hub", "rear_hub", diameter=hub_diameter)]
     return tuple(body + hubs)
 
 
-def default_tapes(car: CarGeometry, segment: float = 0.1, height: float = 0.03) -> tuple:
+def default_tapes(car: Car, segment: float = 0.1, height: float = 0.03) -> tuple:
     """A checker tape along the sill (between the wheel arches) and one along the belt
     line, both on the undeforming passenger cell.
 
@@ -459,14 +583,14 @@ def default_tapes(car: CarGeometry, segment: float = 0.1, height: float = 0.03) 
     return tuple(tapes)
 
 
-def default_camera(car: CarGeometry, x_barrier: float, width: int = 640, height: int = 480,
+def default_camera(car: Car, x_barrier: float, width: int = 640, height: int = 480,
                    m_per_px: float | None = None, approach_m: float = 0.5, **kwargs) -> Camera:
     """A camera that sees the whole car from ``approach_m`` before contact to the
     barrier, with a margin; ``m_per_px`` chosen to fit if not given.
 
     Parameters
     ----------
-    car : CarGeometry
+    car : Car
     x_barrier : float
         Barrier face X, m.
     width, height : int

@@ -1,10 +1,15 @@
-"""Synthetic crash-test film with known truth, for tests and demos.
+"""Synthetic crash-test film with known truth, for tests, demos and the reference world.
 
-Frames are uint8 grayscale ``(H, W)``. Body, wheels, tapes and barrier are polygons drawn
-at ``scene.supersample`` times the resolution and averaged down; quadrant targets are
-drawn analytically (per-pixel coverage of disc and quadrants, ``TARGET_SUBSAMPLES``
-sub-samples a side), so a target's truth centre (the projection of its 3-D centre, with
-the lens distortion applied) is what the pixels show to a small fraction of a pixel.
+Frames are grayscale ``(H, W)`` (uint8 from :meth:`Renderer.render`, float from
+:meth:`Renderer.render_float` for 16-bit output). Body, wheels, tapes, barrier and
+background are polygons of planes parallel to the car's side (each mapped to the image by
+its homography) drawn at ``scene.supersample`` times the resolution and averaged down;
+quadrant targets are drawn analytically: every one of ``TARGET_SUBSAMPLES`` x
+``TARGET_SUBSAMPLES`` sub-samples of a pixel is carried back onto the target's plane and
+the disc and quadrants are evaluated there. Lens distortion and camera shake (a rotation
+of the camera after contact) resample the finished image once, so a target's truth centre
+(the projection of its 3-D centre, with distortion and shake) is what the pixels show to a
+small fraction of a pixel.
 
 Example
 -------
@@ -24,8 +29,8 @@ from typing import Iterator
 import cv2
 import numpy as np
 
-from video.errors import VideoError
-from video.scene import (
+from synth.vehicle import SynthError
+from synth.scene import (
     Motion,
     Scene,
     Target,
@@ -34,6 +39,7 @@ from video.scene import (
     clip_at_face,
     clip_at_floor,
     project,
+    rotation_matrix,
     unproject,
 )
 
@@ -133,12 +139,12 @@ class Renderer:
 
     def __init__(self, scene: Scene, motion: Motion):
         if scene.direction not in (1, -1):
-            raise ValueError(f"scene.direction must be +1 or -1, got {scene.direction}")
+            raise SynthError(f"scene.direction must be +1 or -1, got {scene.direction}")
         n = motion.n
         for name in ("x", "z", "pitch", "front_wheel_angle", "rear_wheel_angle"):
             arr = np.asarray(getattr(motion, name), dtype=float)
             if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-                raise ValueError(f"motion.{name} must be {n} finite values, got shape {arr.shape}")
+                raise SynthError(f"motion.{name} must be {n} finite values, got shape {arr.shape}")
         self.scene = scene
         self.motion = motion
         cam = scene.camera
@@ -153,6 +159,7 @@ class Renderer:
             self._fill(lo, self._barrier_layer, float(scene.barrier_grey))
         self.background_lo = self._downsample(lo)
         self._maps = self._distortion_maps() if (cam.k1 or cam.k2) else None
+        self._pixel_grid = None  # (u, v) float32 maps of the output pixels, made when needed
         self.impact_speed = self._impact_speed()
         self._debris = self._debris_particles()
         self._gain = self._flicker_gains()
@@ -170,28 +177,40 @@ class Renderer:
         """Wall, floor and barrier at the supersampled resolution, uint8."""
         cam, sc, ss = self.cam, self.scene, self.ss
         H, W = cam.height * ss, cam.width * ss
-        rng = np.random.default_rng(12345)
-        tex = _texture((H, W), rng, 14.0 * ss)
+        rng = np.random.default_rng(sc.texture_seed)
+        tex = _texture((H, W), rng, sc.texture_scale * ss)
         fine = _texture((H, W), rng, 3.0 * ss)
-        img = 85.0 + 14.0 * tex + 5.0 * fine
-        # tiles on the wall: faint dark lines every 0.5 m
+        img = sc.wall_grey + sc.wall_texture * tex + 5.0 * fine
         d_bg = cam.distance_background
-        corners = unproject(cam, np.array([[0, 0], [cam.width - 1, cam.height - 1]]), d_bg, sc.direction)
-        X0, X1 = sorted(corners[:, 0])
-        for X in np.arange(np.floor(X0 / 0.5) * 0.5, X1 + 0.5, 0.5):
-            a, b = self._hi(self._proj(np.array([[X, 0.0], [X, 4.0]]), d_bg))
-            cv2.line(img, tuple(map(int, a)), tuple(map(int, b)), 60.0, max(1, ss), cv2.LINE_AA, _SHIFT)
-        for Z in np.arange(0.5, 4.0, 0.5):
-            a, b = self._hi(self._proj(np.array([[X0 - 1, Z], [X1 + 1, Z]]), d_bg))
-            cv2.line(img, tuple(map(int, a)), tuple(map(int, b)), 60.0, max(1, ss), cv2.LINE_AA, _SHIFT)
-        # floor: everything below the wall's base, lighter, with lines along the travel
-        v_base = float(self._proj(np.array([[0.0, 0.0]]), d_bg)[0, 1])
-        vb = int(np.clip(round((v_base + 0.5) * ss - 0.5), 0, H))
-        img[vb:, :] = 120.0 + 8.0 * fine[vb:, :]
+        corners = np.array([[0, 0], [cam.width - 1, 0], [0, cam.height - 1], [cam.width - 1, cam.height - 1]], float)
+        wall = unproject(cam, corners, d_bg, sc.direction)
+        X0, X1 = float(wall[:, 0].min()), float(wall[:, 0].max())
+        # tiles on the wall, up to 4 m: faint dark lines every tile_m
+        if sc.tile_m > 0:
+            step = sc.tile_m
+            for X in np.arange(np.floor(X0 / step) * step, X1 + step, step):
+                a, b = self._hi(self._proj(np.array([[X, 0.0], [X, 4.0]]), d_bg))
+                cv2.line(img, tuple(map(int, a)), tuple(map(int, b)), 60.0, max(1, ss), cv2.LINE_AA, _SHIFT)
+            for Z in np.arange(step, 4.0, step):
+                a, b = self._hi(self._proj(np.array([[X0 - 1, Z], [X1 + 1, Z]]), d_bg))
+                cv2.line(img, tuple(map(int, a)), tuple(map(int, b)), 60.0, max(1, ss), cv2.LINE_AA, _SHIFT)
+        ang = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+        circle = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        for X, Z, rad in sc.lamps:
+            self._fill(img, self._proj(np.array([X, Z]) + rad * circle, d_bg), 255.0)
+        # floor: everything below the wall's base line, lighter, with lines along the travel
+        a, b = self._proj(np.array([[X0 - 5.0, 0.0], [X1 + 5.0, 0.0]]), d_bg)
+        near = self._proj(np.array([[0.5 * (X0 + X1), 0.0]]), 0.5 * cam.distance_car)[0]
+        nrm = np.array([-(b - a)[1], (b - a)[0]])
+        sgn = 1.0 if np.dot(near - a, nrm) > 0 else -1.0
+        uu = (np.arange(W, dtype=np.float32) + 0.5) / ss - 0.5
+        vv = (np.arange(H, dtype=np.float32) + 0.5) / ss - 0.5
+        floor = (sgn * (nrm[0] * (uu[None, :] - a[0]) + nrm[1] * (vv[:, None] - a[1]))) > 0
+        img[floor] = sc.floor_grey + 8.0 * fine[floor]
         for d in np.linspace(cam.distance_car - 0.5, d_bg, 6):
-            v = float(self._proj(np.array([[0.0, 0.0]]), d)[0, 1])
-            a = self._hi(np.array([[-10.0, v], [cam.width + 10.0, v]]))
-            cv2.line(img, tuple(map(int, a[0])), tuple(map(int, a[1])), 100.0, max(1, ss), cv2.LINE_AA, _SHIFT)
+            ends = unproject(cam, corners, d, sc.direction)[:, 0]
+            a, b = self._hi(self._proj(np.array([[ends.min() - 5.0, 0.0], [ends.max() + 5.0, 0.0]]), d))
+            cv2.line(img, tuple(map(int, a)), tuple(map(int, b)), sc.floor_grey - 20.0, max(1, ss), cv2.LINE_AA, _SHIFT)
         self._barrier_layer = self._barrier_polygon()
         if cam.distance_barrier >= cam.distance_car:
             self._fill(img, self._barrier_layer, float(sc.barrier_grey))
@@ -247,6 +266,41 @@ class Renderer:
         und = und.reshape(cam.height, cam.width, 2).astype(np.float32)
         return und[..., 0].copy(), und[..., 1].copy()
 
+    def shake_rotation(self, i: float) -> np.ndarray | None:
+        """Extra rotation (3x3) of the camera at frame ``i`` from the shake after contact,
+        or None (no shake, or before contact)."""
+        e = self.scene.effects
+        if not (e.shake_px or e.shake_roll):
+            return None
+        t = (i - self.contact_frame) / self.motion_fps
+        if t < 0:
+            return None
+        env = math.exp(-t / max(e.shake_decay_s, 1e-6))
+        a = env * math.sin(2 * math.pi * e.shake_hz * t)
+        b = env * math.sin(2 * math.pi * 1.37 * e.shake_hz * t)
+        f = self.cam.focal_px
+        du, dv = e.shake_px * a * math.cos(e.shake_angle), e.shake_px * a * math.sin(e.shake_angle)
+        return rotation_matrix(math.atan(du / f), -math.atan(dv / f), e.shake_roll * b)
+
+    def _sample_maps(self, i: int) -> tuple | None:
+        """Where each output pixel of frame ``i`` samples the rendered (undistorted,
+        unshaken) image: lens distortion, then the shake's homography, as ``cv2.remap``'s
+        (map1, map2); None: nowhere else."""
+        Rs = self.shake_rotation(i)
+        if Rs is None:
+            return self._maps
+        if self._maps is not None:
+            mu, mv = self._maps
+        else:
+            if self._pixel_grid is None:
+                u, v = np.meshgrid(np.arange(self.cam.width, dtype=np.float32), np.arange(self.cam.height, dtype=np.float32))
+                self._pixel_grid = (u, v)
+            mu, mv = self._pixel_grid
+        K = self.cam.K
+        Hb = K @ Rs.T @ np.linalg.inv(K)  # shaken undistorted px -> rendered px
+        pts = cv2.perspectiveTransform(cv2.merge([mu, mv]).reshape(-1, 1, 2), Hb)
+        return pts.reshape(mu.shape[0], mu.shape[1], 2), None  # one two-channel map
+
     def _impact_speed(self) -> float:
         m, c = self.motion, self.contact_frame
         t = np.asarray(m.t, dtype=float)
@@ -288,8 +342,14 @@ class Renderer:
 
     # ------------------------------------------------------------------- per frame
     def pose(self, f: float) -> dict:
-        """Pose at fractional frame ``f`` (see :meth:`Motion.at`)."""
-        return self.motion.at(f)
+        """Pose at fractional frame ``f`` (see :meth:`Motion.at`); ``crush`` computed
+        from the silhouette when the motion has none."""
+        pose = self.motion.at(f)
+        if pose["crush"] is None:
+            car = self.scene.car
+            P = body_to_plane(car.silhouette_side, car, pose, self.x_cg0)
+            pose["crush"] = float(max(P[:, 0].max() - self.scene.x_barrier, 0.0))
+        return pose
 
     def wheel_centres(self, pose: dict) -> dict:
         """Car-plane ``[X, Z]`` (2,) of each wheel centre, m: the axle point of the body
@@ -307,13 +367,18 @@ class Renderer:
         cam = self.cam
         if target.kind == "body":
             P = body_to_plane(np.array([[target.x, target.z]]), self.scene.car, pose, self.x_cg0)[0]
-            return P, -pose["pitch"], cam.distance_car
+            return P, -pose["pitch"] + target.angle, cam.distance_car
+        if target.kind == "deform":
+            crush = pose["crush"]
+            P = body_to_plane(np.array([[target.x - target.follow * crush, target.z]]), self.scene.car, pose, self.x_cg0)[0]
+            return P, -pose["pitch"] + target.angle + target.turn * crush, cam.distance_car
         if target.kind in ("front_hub", "rear_hub"):
             which = target.kind.split("_")[0]
-            return self.wheel_centres(pose)[which], -pose[f"{which}_wheel_angle"], cam.distance_car
+            return self.wheel_centres(pose)[which], -pose[f"{which}_wheel_angle"] + target.angle, cam.distance_car
         if target.kind == "fixed":
-            return np.array([target.x, target.z]), 0.0, cam.distance_barrier
-        raise ValueError(f"target {target.name}: unknown kind {target.kind!r} (body, front_hub, rear_hub, fixed)")
+            depth = cam.distance_barrier if target.depth is None else target.depth
+            return np.array([target.x, target.z]), target.angle, depth
+        raise SynthError(f"target {target.name}: unknown kind {target.kind!r} (body, deform, front_hub, rear_hub, fixed)")
 
     def _downsample(self, canvas: np.ndarray) -> np.ndarray:
         """Supersampled canvas -> final resolution, float32 (box average)."""
@@ -353,6 +418,10 @@ class Renderer:
             for tyre, rim in wheels:
                 self._fill(canvas, tyre, float(sc.tyre_grey))
                 self._fill(canvas, rim, float(sc.rim_grey))
+            if sc.hubcap_grey is not None:
+                for c in self.wheel_centres(pose).values():
+                    self._fill(canvas, self._proj(clip_at_face(c + 0.3 * car.wheel_radius * circle, sc.x_barrier), d),
+                               float(sc.hubcap_grey))
             self._draw_tapes(canvas, pose)
             if not self._barrier_behind:
                 self._fill(canvas, self._barrier_layer, float(sc.barrier_grey))
@@ -381,12 +450,21 @@ class Renderer:
                     self._fill(canvas, self._proj(Pk, d), float(grey))
 
     def _draw_target(self, img: np.ndarray, target: Target, pose: dict) -> None:
-        """Composite a quadrant target into ``img`` (float32, final resolution)."""
+        """Composite a quadrant target into ``img`` (float32, final resolution, undistorted).
+
+        Each of ``TARGET_SUBSAMPLES`` x ``TARGET_SUBSAMPLES`` sub-samples of a pixel is
+        carried back onto the target's plane (the plane's inverse homography) and the disc
+        and quadrants are evaluated there, with an edge as soft as one sub-sample."""
         sc, cam = self.scene, self.cam
         centre, angle, dist = self.target_plane(target, pose)
-        uv = self._proj(centre[None, :], dist)[0]
-        px_m = dist / cam.focal_px  # m per px on that plane
-        R = 0.5 * target.diameter / px_m  # radius, px
+        Hm = cam.homography(dist, sc.direction)
+        p = Hm @ np.array([centre[0], centre[1], 1.0])
+        uv = p[:2] / p[2]
+        # Jacobian of the plane -> image map at the centre (px per m)
+        J = (Hm[:2, :2] - np.outer(uv, Hm[2, :2])) / p[2]
+        px_m = 1.0 / math.sqrt(abs(np.linalg.det(J)))  # m per px on that plane, near the target
+        Rm = 0.5 * target.diameter
+        R = Rm * float(np.linalg.svd(J, compute_uv=False)[0])  # largest radius, px
         u0, v0 = int(np.floor(uv[0] - R - 2)), int(np.floor(uv[1] - R - 2))
         u1, v1 = int(np.ceil(uv[0] + R + 2)), int(np.ceil(uv[1] + R + 2))
         H, W = img.shape
@@ -397,44 +475,47 @@ class Renderer:
         offs = (np.arange(k) + 0.5) / k - 0.5
         uu = np.arange(u0c, u1c + 1)[None, :, None, None] + offs[None, None, None, :]
         vv = np.arange(v0c, v1c + 1)[:, None, None, None] + offs[None, None, :, None]
-        du = uu - uv[0]
-        dv = vv - uv[1]
-        # car-plane local axes: image u is direction*X, image v is -Z
-        dX = sc.direction * du
-        dZ = -dv
+        uu, vv = np.broadcast_arrays(uu, vv)
+        Hi = np.linalg.inv(Hm)
+        w = Hi[2, 0] * uu + Hi[2, 1] * vv + Hi[2, 2]
+        dX = (Hi[0, 0] * uu + Hi[0, 1] * vv + Hi[0, 2]) / w - centre[0]
+        dZ = (Hi[1, 0] * uu + Hi[1, 1] * vv + Hi[1, 2]) / w - centre[1]
         c, s = math.cos(angle), math.sin(angle)
         lx = c * dX + s * dZ
         lz = -s * dX + c * dZ
-        h = 1.0 / k  # sub-sample width, px
+        h = px_m / k  # sub-sample width on the plane, m
         r = np.sqrt(dX * dX + dZ * dZ)
-        disc = np.clip((R - r) / h + 0.5, 0.0, 1.0)
+        disc = np.clip((Rm - r) / h + 0.5, 0.0, 1.0)
         s1 = np.clip(lx / h + 0.5, 0.0, 1.0)
         s2 = np.clip(lz / h + 0.5, 0.0, 1.0)
         dark = disc * (s1 * s2 + (1 - s1) * (1 - s2))
         disc = disc.mean(axis=(2, 3))
         dark = dark.mean(axis=(2, 3))
+        light_g = sc.target_light if target.light is None else target.light
+        dark_g = sc.target_dark if target.dark is None else target.dark
         patch = img[v0c : v1c + 1, u0c : u1c + 1]
         patch *= 1.0 - disc
-        patch += (disc - dark) * sc.target_light + dark * sc.target_dark
+        patch += (disc - dark) * light_g + dark * dark_g
 
-    def _occluder_state(self, i: float) -> list[tuple[np.ndarray, float, str]]:
-        """Occluder blobs active at frame ``i``: (car-plane centre, radius m, target)."""
+    def _occluder_state(self, i: float) -> list[tuple[np.ndarray, float, str, float]]:
+        """Occluder blobs active at frame ``i``: (car-plane centre, radius m, target,
+        depth m: the target's)."""
         out = []
         for occ in self.scene.occluders:
             if not occ.start <= i < occ.stop:
                 continue
             tgt = self._target_by_name(occ.target)
-            centre, _, _ = self.target_plane(tgt, self.pose(i))
+            centre, _, depth = self.target_plane(tgt, self.pose(i))
             a = (i - occ.start) / max(occ.stop - occ.start - 1, 1)
             offset = (-2.0 + 4.0 * a) * occ.radius
-            out.append((centre + np.array([offset, 0.0]), occ.radius, occ.target))
+            out.append((centre + np.array([offset, 0.0]), occ.radius, occ.target, depth))
         return out
 
     def _target_by_name(self, name: str) -> Target:
         for t in self.scene.targets:
             if t.name == name:
                 return t
-        raise ValueError(f"occluder refers to target {name!r}, which is not in the scene")
+        raise SynthError(f"occluder refers to target {name!r}, which is not in the scene")
 
     def _draw_clean(self, f: float) -> np.ndarray:
         """One sub-frame at fractional frame ``f``: float32 (H, W), undistorted."""
@@ -443,22 +524,22 @@ class Renderer:
         for target in self.scene.targets:
             self._draw_target(img, target, pose)
         d = self.cam.distance_car
-        for centre, radius, _ in self._occluder_state(f):
-            uv = self._proj(centre[None, :], d)[0]
-            r_px = radius / self.cam.scale_at(d)
+        for centre, radius, _, depth in self._occluder_state(f):
+            uv = self._proj(centre[None, :], depth)[0]
+            r_px = radius / self.cam.scale_at(depth)
             cv2.ellipse(img, (int(round(uv[0] * 16)), int(round(uv[1] * 16))),
                         (int(round(r_px * 16)), int(round(0.8 * r_px * 16))), 20.0, 0, 360, 20.0, -1, cv2.LINE_AA, 4)
         if self._debris is not None:
             age = (f - self.contact_frame - self._debris[:, 0]) / self.motion_fps
-            for (a, p) in zip(age, self._debris):
-                if a < 0:
-                    continue
-                X = p[1] + p[3] * a
-                Z = p[2] + p[4] * a - 4.9 * a * a
-                uv = self._proj(np.array([[X, Z]]), d - 0.3)[0]
-                r_px = max(p[5] / self.cam.scale_at(d), 0.7)
-                cv2.circle(img, (int(round(uv[0] * 16)), int(round(uv[1] * 16))), int(round(r_px * 16)),
-                           30.0 if p[5] < 0.025 else 200.0, -1, cv2.LINE_AA, 4)
+            live = age >= 0
+            if live.any():
+                a, p = age[live], self._debris[live]
+                XZ = np.stack([p[:, 1] + p[:, 3] * a, p[:, 2] + p[:, 4] * a - 4.9 * a * a], axis=1)
+                uvs = self._proj(XZ, d - 0.3)
+                for uv, size in zip(uvs, p[:, 5]):
+                    r_px = max(size / self.cam.scale_at(d), 0.7)
+                    cv2.circle(img, (int(round(uv[0] * 16)), int(round(uv[1] * 16))), int(round(r_px * 16)),
+                               30.0 if size < 0.025 else 200.0, -1, cv2.LINE_AA, 4)
         return img
 
     @property
@@ -467,8 +548,9 @@ class Renderer:
         t = np.asarray(self.motion.t, dtype=float)
         return float(np.round(1.0 / np.median(np.diff(t)), 6)) if len(t) > 1 else 1000.0
 
-    def render(self, i: int) -> np.ndarray:
-        """Frame ``i`` as uint8 (H, W) with every effect of the scene applied."""
+    def render_float(self, i: int) -> np.ndarray:
+        """Frame ``i`` as float32 (H, W) grey levels 0-255 with every effect of the scene
+        applied except the final rounding (and JPEG): for 16-bit output."""
         e = self.scene.effects
         nsub = max(int(e.blur_substeps), 1)
         if nsub == 1:
@@ -479,16 +561,24 @@ class Renderer:
             for o in offs:
                 img += self._draw_clean(i + e.exposure * o)
             img /= nsub
-        if self._maps is not None:
-            img = cv2.remap(img, self._maps[0], self._maps[1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        maps = self._sample_maps(i)
+        if maps is not None:
+            img = cv2.remap(img, maps[0], maps[1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         if e.flicker:
             img *= float(self._gain[i])
+        if e.gain != 1.0:
+            img *= float(e.gain)
         if e.noise_sigma > 0:
             noise = np.empty_like(img)
-            cv2.setRNGSeed(int(e.seed * 100003 + i))
+            cv2.setRNGSeed(int((e.seed * 100003 + i) % 2147483647))
             cv2.randn(noise, 0.0, float(e.noise_sigma))
             img += noise
-        out = np.clip(img + 0.5, 0, 255).astype(np.uint8)
+        return np.clip(img, 0.0, 255.0, out=img)
+
+    def render(self, i: int) -> np.ndarray:
+        """Frame ``i`` as uint8 (H, W) with every effect of the scene applied."""
+        e = self.scene.effects
+        out = (self.render_float(i) + 0.5).astype(np.uint8)
         if e.jpeg_quality is not None:
             ok, buf = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(e.jpeg_quality)])
             out = cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE)
@@ -516,12 +606,13 @@ class Renderer:
         row["front_wheel_height_m"] = float(wheels["front"][1] - self.scene.car.wheel_radius)
         row["rear_wheel_height_m"] = float(wheels["rear"][1] - self.scene.car.wheel_radius)
         occl = self._occluder_state(float(i))
+        Rs = self.shake_rotation(i)
         for t in self.scene.targets:
             centre, _, dist = self.target_plane(t, pose)
-            u, v = project(self.cam, centre[None, :], dist, self.scene.direction, distort=True)[0]
+            u, v = project(self.cam, centre[None, :], dist, self.scene.direction, distort=True, extra_rotation=Rs)[0]
             row[f"{t.name}_u_px"] = float(u)
             row[f"{t.name}_v_px"] = float(v)
-            covered = any(np.hypot(*(c - centre)) < r + 0.5 * t.diameter for c, r, name in occl)
+            covered = any(np.hypot(*(c - centre)) < r + 0.5 * t.diameter for c, r, name, _ in occl)
             row[f"{t.name}_occluded"] = int(covered)
         return row
 
@@ -530,9 +621,7 @@ class Renderer:
         unclipped silhouette passes the barrier face (>= 0)."""
         if self.motion.crush is not None:
             return float(np.asarray(self.motion.crush, dtype=float)[i])
-        car = self.scene.car
-        P = body_to_plane(car.silhouette_side, car, self.pose(float(i)), self.x_cg0)
-        return float(max(P[:, 0].max() - self.scene.x_barrier, 0.0))
+        return float(self.pose(float(i))["crush"])
 
     def truth_meta(self) -> dict:
         """Film-level truth: scale, contact frame, impact speed, camera, targets."""
@@ -554,9 +643,15 @@ class Renderer:
                 "principal_point": list(cam.principal_point), "centre_x_m": cam.centre_x,
                 "centre_z_m": cam.centre_z, "distance_car_m": cam.distance_car,
                 "distance_barrier_m": cam.distance_barrier, "distance_background_m": cam.distance_background,
-                "k1": cam.k1, "k2": cam.k2,
+                "k1": cam.k1, "k2": cam.k2, "yaw_rad": cam.yaw, "pitch_rad": cam.pitch, "roll_rad": cam.roll,
+                "principal_offset_px": [cam.pp_du, cam.pp_dv],
             },
-            "targets": [{"name": t.name, "kind": t.kind, "x_m": t.x, "z_m": t.z, "diameter_m": t.diameter} for t in sc.targets],
+            "targets": [{"name": t.name, "kind": t.kind, "x_m": t.x, "z_m": t.z, "diameter_m": t.diameter,
+                         "angle_rad": t.angle, "deforms": t.kind == "deform",
+                         "depth_m": (self.target_plane(t, self.pose(0.0))[2]),
+                         "follow": t.follow, "turn_rad_per_m": t.turn,
+                         "dark_grey": sc.target_dark if t.dark is None else t.dark,
+                         "light_grey": sc.target_light if t.light is None else t.light} for t in sc.targets],
             "tapes": [{"name": t.name, "x0_m": t.x0, "x1_m": t.x1, "z_m": t.z, "segment_m": t.segment, "height_m": t.height} for t in sc.tapes],
             "effects": {k: getattr(sc.effects, k) for k in sc.effects.__dataclass_fields__},
         }
@@ -603,13 +698,13 @@ def write_film(renderer: Renderer, path: str | Path, container_fps: float | None
         path.parent.mkdir(parents=True, exist_ok=True)
         writer = cv2.VideoWriter(str(path), fourcc, fps, (cam.width, cam.height), True)
         if not writer.isOpened():
-            raise VideoError(f"cannot write video {path} (no encoder for {suffix}); write a folder of PNG frames instead")
+            raise SynthError(f"cannot write video {path} (no encoder for {suffix}); write a folder of PNG frames instead")
     elif suffix == "":
         path.mkdir(parents=True, exist_ok=True)
         if any(path.glob("frame_*.png")):
-            raise VideoError(f"folder {path} already holds frames; write the film to a new folder")
+            raise SynthError(f"folder {path} already holds frames; write the film to a new folder")
     else:
-        raise VideoError(f"cannot write {path}: use .mp4, .avi, .mov or a folder name without suffix")
+        raise SynthError(f"cannot write {path}: use .mp4, .avi, .mov or a folder name without suffix")
     rows = []
     k = 0
     try:
@@ -684,7 +779,7 @@ def read_truth(film_path: str | Path) -> tuple[dict, dict]:
     """
     jpath, cpath = truth_paths(film_path)
     if not jpath.exists() or not cpath.exists():
-        raise VideoError(f"no truth files beside {film_path} ({jpath.name}, {cpath.name}); render the film with video.render.write_film")
+        raise SynthError(f"no truth files beside {film_path} ({jpath.name}, {cpath.name}); render the film with synth.render.write_film")
     meta = json.loads(jpath.read_text())
     with cpath.open() as fh:
         rows = list(csv.DictReader(fh))
