@@ -261,12 +261,14 @@ def test_wrong_vehicle_with_force_fits_and_carries_the_warning(tmp_path, capfd):
 @pytest.mark.parametrize("delay", [2.5, 7.0])
 def test_ctrl_c_is_honoured_within_2_s_and_leaves_nothing(tmp_path, delay):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    p = subprocess.Popen([sys.executable, "-m", "identify.cli", "fit", str(SAMPLE), "--vehicle", "audi_a4",
+    # Ctrl-C as in a terminal: a test runner started in the background (`&`, some CI shells)
+    # hands its children SIGINT ignored, and Python keeps it so; the child restores
+    # Python's own handler first (no preexec_fn: forking a multithreaded JAX process is unsafe)
+    start = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+             "sys.argv = ['identify'] + sys.argv[1:]; runpy.run_module('identify.cli', run_name='__main__')")
+    p = subprocess.Popen([sys.executable, "-c", start, "fit", str(SAMPLE), "--vehicle", "audi_a4",
                           "--out", str(tmp_path / "res")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, env=env,
-                         # as in a terminal: a test runner started in the background (`&`, some CI
-                         # shells) hands its children SIGINT ignored, and Python then keeps it so
-                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # fmt: skip
+                         text=True, env=env)  # fmt: skip
     time.sleep(delay)  # importing, tracking or compiling
     assert p.poll() is None, p.communicate()
     t0 = time.perf_counter()

@@ -18,12 +18,13 @@ from synth.scoring import judge_discoveries, tracking_errors
 from synth.vehicle import SynthError, load_car
 from synth.world import EFFECTS, make_world, read_truth, write_world
 
-# The film test's seed: its randomized footage (PNG frames, 1000 fps, 100 mm tapes, a
-# camera rolled and pitched by a degree or so, lens distortion, motion blur, noise) as
-# `identify synth --seed 2` draws it. The benchmark scores the tracker over many seeds;
-# this test checks that a world's truth and the tracker agree on time and x origins, signs
-# and scale.
-FILM_SEED = 2
+# The film test's seed: its randomized footage as `identify synth --seed 17` draws it (PNG
+# frames, 800x600 at 500 fps, 50 mm tapes, about 10 mm per pixel, a camera yawed, pitched
+# and rolled by up to 3 degrees, lens distortion, camera shake after impact, motion blur,
+# noise), small enough to render and track in seconds. The benchmark scores the tracker
+# over many seeds; this test checks that a world's truth and the tracker agree on time and
+# x origins, signs and scale.
+FILM_SEED = 17
 
 
 def run_cli(*args, cwd=None):
@@ -92,7 +93,7 @@ def test_reference_model_is_not_sim(tmp_path):
     from synth.physics import simulate_reference
     from synth.vehicle import car_to_toml
 
-    for seed in (3, 4, 5):
+    for seed in (3, 4):
         world = make_world(seed, "clean", fmt="isomme")
         ref = simulate_reference(world.car, world.params, world.v0, duration=0.25, fps=1000.0)
         path = tmp_path / f"car{seed}.toml"
@@ -139,8 +140,8 @@ def test_worlds_are_reproducible_and_vary():
     a, b, c = make_world(5, "random"), make_world(5, "random"), make_world(6, "random")
     assert a.params == b.params and a.footage == b.footage and a.v0 == b.v0
     assert a.params != c.params and a.footage != c.footage
-    effects = {make_world(s, "random", fmt="isomme").effect for s in range(8)}
-    assert len(effects) >= 3 and effects <= set(EFFECTS)
+    effects = {make_world(s, "random", fmt="isomme").effect for s in range(5)}
+    assert len(effects) >= 3 and effects <= set(EFFECTS)  # "random" draws the effect from the seed
 
 
 def test_bad_world_input_is_refused():
