@@ -201,6 +201,13 @@ def film_name(fmt: str) -> str:
     return {"mp4": "crash.mp4", "avi": "crash.avi", "png": "crash_frames", "tiff16": "crash_frames"}[fmt]
 
 
+def check_out_folder(out: Path) -> None:
+    """Raise SynthError unless ``out`` is free for a world: absent, or an empty folder."""
+    out = Path(out)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise SynthError(f"{out} exists and is not an empty folder; choose a new --out (nothing was changed)")
+
+
 def write_world(world: World, out: Path, progress=None, workdir: Path | None = None) -> dict:
     """Simulate the world and write its folder: the recording, ``vehicle.toml`` and
     ``truth.json``; return the truth.
@@ -218,8 +225,7 @@ def write_world(world: World, out: Path, progress=None, workdir: Path | None = N
     from synth.physics import simulate_reference
 
     out = Path(out)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise SynthError(f"{out} exists and is not an empty folder; choose a new --out (nothing was changed)")
+    check_out_folder(out)
     parent = out.resolve().parent
     try:
         parent.mkdir(parents=True, exist_ok=True)

@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from synth.vehicle import SynthError
-    from synth.world import make_world, write_world
+    from synth.world import check_out_folder, make_world, write_world
 
     t0 = time.perf_counter()
 
@@ -50,9 +50,8 @@ def run(args: argparse.Namespace) -> int:
     from identify.results import make_temp_dir, remove_temp
 
     out = args.out
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise UserError(f"{out} exists and is not an empty folder; choose a new --out (nothing was changed)")
     try:
+        check_out_folder(out)  # before the world's simulations: fail in the first second
         world = make_world(args.seed, args.effect, args.vehicle, args.format)
     except SynthError as err:
         raise UserError(str(err)) from None
