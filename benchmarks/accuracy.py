@@ -38,6 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
+from synth.world import EFFECTS
+
 SEED_BASE = 910_000   # benchmark seeds; tests use seeds below 1000
 # 40 worlds: clean and each effect, interleaved so that a short run (--n) sees a mix
 SCHEDULE = ("clean", "stiffness_zone", "clean", "front_wheel_block", "clean", "rate_dependence",
@@ -47,9 +49,13 @@ VSIM_DEFAULTS = {"k_compression": 730e3, "k_restitution": 730e3, "restitution": 
 ABSOLUTE = ("restitution", "dz_contact")  # errors in their own units, not in %
 
 
-def world_plan(n: int) -> list[tuple[int, str]]:
-    """(seed, effect) of the first ``n`` benchmark worlds."""
-    return [(SEED_BASE + i, SCHEDULE[i % len(SCHEDULE)]) for i in range(n)]
+def world_plan(n: int, effect: str | None = None) -> list[tuple[int, str]]:
+    """(seed, effect) of the first ``n`` benchmark worlds (all of ``effect`` when given)."""
+    return [(SEED_BASE + i, effect or SCHEDULE[i % len(SCHEDULE)]) for i in range(n)]
+
+
+# the engine's fitted parameters (a second measured body, or a discovery) vs the world's truth
+ENGINE = {"engine_impact.engine_mass": "engine_mass", "engine_impact.gap": "engine_gap"}
 
 
 def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
@@ -108,7 +114,17 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
                 entry["z"] = err / p["std"]
             params[name] = entry
         row["params"] = params
+        engine = {}
+        for name, true_name in ENGINE.items():
+            p = doc["parameters"].get(name)
+            if p is not None and p.get("std"):
+                true = truth["hidden"][true_name]
+                engine[name] = {"value": p["value"], "std": p["std"], "true": true, "z": (p["value"] - true) / p["std"]}
+        if engine:
+            row["engine"] = engine
         row["discovered"] = [d["effect"] for d in doc.get("discoveries", [])]
+        # a second body the recording measured (engine accelerometers) is modelled, not discovered
+        row["measured_effects"] = [e for e in doc["fit"]["model"].split("+")[1:] if e not in row["discovered"]]
         row["verdict"] = judge_discoveries(row["discovered"], [e["name"] for e in truth["effects"]])
         row["rms_mm"] = 1e3 * doc["fit"]["rms_m"]
     return row
@@ -192,6 +208,14 @@ def summary(rows: list[dict]) -> dict:
             "not_identified": int(sum(not p["identified"] for p in ps)),
         }
     out["parameters_on_clean_worlds"] = per
+    eng = [r["engine"] for r in ok if r.get("engine")]
+    if eng:
+        out["engine"] = {name: {"worlds": len([e for e in eng if name in e]),
+                                "within_1sigma": float(np.mean([abs(e[name]["z"]) <= 1 for e in eng if name in e])),
+                                "within_2sigma": float(np.mean([abs(e[name]["z"]) <= 2 for e in eng if name in e])),
+                                "abs_err_median": float(np.median([abs(e[name]["value"] - e[name]["true"])
+                                                                   for e in eng if name in e]))}
+                         for name in ENGINE}
     return out
 
 
@@ -213,6 +237,9 @@ def print_summary(s: dict) -> None:
         print(f"| {name} | {_cell(p['clean_within_tol'], '{:.2f}')} | {p['tol']:g}{unit} | "
               f"{_cell(p['clean_abs_err_median'], '{:.3g}')}{unit} | {_cell(p['default_abs_err_median'], '{:.3g}')}{unit} | "
               f"{_cell(p['cover_1sigma'], '{:.2f}')} | {_cell(p['cover_2sigma'], '{:.2f}')} | {p['not_identified']} |")
+    for name, e in s.get("engine", {}).items():
+        print(f"engine {name}: {e['worlds']} worlds, within 1 sigma {e['within_1sigma']:.2f}, within 2 sigma "
+              f"{e['within_2sigma']:.2f}, median abs error {e['abs_err_median']:.3g}")
 
 
 def _work(args):
@@ -224,6 +251,7 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=40, help="number of worlds (default 40)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (each compiles the fit once)")
     ap.add_argument("--format", choices=("film", "isomme"), default="film")
+    ap.add_argument("--effect", default=None, choices=EFFECTS, help="every world with this one effect")
     ap.add_argument("--json", type=Path, default=None, help="write every row and the summary here")
     ap.add_argument("--keep", type=Path, default=None, help="keep the worlds' folders here")
     ap.add_argument("--table", type=Path, default=None, help="only print the table and summary of a --json file")
@@ -235,7 +263,7 @@ def main(argv=None) -> int:
         return 0
     if a.keep:
         a.keep.mkdir(parents=True, exist_ok=True)
-    plan = [(seed, effect, a.format, a.keep) for seed, effect in world_plan(a.n)]
+    plan = [(seed, effect, a.format, a.keep) for seed, effect in world_plan(a.n, a.effect)]
     t0 = time.perf_counter()
     rows = []
     partial = a.json.with_suffix(".partial.jsonl") if a.json else None

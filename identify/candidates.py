@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from identify.model import FreeParameter, base_parameters
-from sim import FrontWheelBlock, Params, ProgressiveStiffness, RateDependence, StiffnessZone
+from sim import EngineImpact, FrontWheelBlock, Params, ProgressiveStiffness, RateDependence, StiffnessZone
 
 NEVER_REACHED = 10.0  # m: a depth the crush never reaches (the mechanism stays off)
 
@@ -40,6 +40,8 @@ class Candidate:
     starts : starting guesses, each field -> value or a rule (:func:`starting_guesses`).
     report : field -> name of the parameter in the discovery's report (``depth_m``).
     text : the one-sentence explanation when there is no mechanism class.
+    priors : callable(vehicle) -> {``effect.field``: (value, sigma)}: what is known of its
+        parameters before any fit (``identify.fitting.fit``'s ``priors``), or None.
     """
 
     effect: str
@@ -49,6 +51,7 @@ class Candidate:
     starts: tuple[dict[str, float], ...]
     report: dict[str, str]
     text: str = ""
+    priors: object = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -105,7 +108,54 @@ CANDIDATES: tuple[Candidate, ...] = (
     ),
 )
 
+ENGINE_MASS_FRACTION = 0.13  # of the test mass, when the vehicle file gives no engine_mass
+ENGINE_GAP_M = 0.35  # m, when the vehicle file gives no engine_gap
+ENGINE_MASS_REL_SIGMA = 0.3
+ENGINE_GAP_SIGMA_M = 0.1
+
+
+def engine_priors(vehicle) -> dict[str, tuple[float, float]]:
+    """The engine's mass and gap as the vehicle file estimates them (else 13 % of the mass
+    and 0.35 m), with one-sigma errors of 30 % and 0.1 m (``data/README.md``)."""
+    mass = vehicle.engine_mass if vehicle.engine_mass is not None else ENGINE_MASS_FRACTION * float(vehicle.mass)
+    gap = vehicle.engine_gap if vehicle.engine_gap is not None else ENGINE_GAP_M
+    return {"engine_impact.engine_mass": (mass, ENGINE_MASS_REL_SIGMA * mass),
+            "engine_impact.gap": (gap, ENGINE_GAP_SIGMA_M)}
+
+
+CANDIDATES = CANDIDATES + (
+    Candidate(
+        "engine_impact", EngineImpact,
+        (_p("engine_impact", "engine_mass", "kg", "logit", lower=20.0, upper=700.0),
+         _p("engine_impact", "gap", "m", "logit", lower=0.05, upper=1.2),
+         _p("engine_impact", "k_engine", "N/m", "log", scale=1e6),
+         _p("engine_impact", "k_rear", "N/m", "log", scale=1e6)),
+        {"engine_mass": 0.0, "gap": NEVER_REACHED, "k_engine": 3e6, "k_rear": 1e6, "restitution_engine": 0.1,
+         "mount_stiffness": 8e5, "mount_break_force": 5e4},
+        ({"engine_mass": "prior", "gap": "prior", "k_engine": 3e6, "k_rear": 1e6},),
+        {"engine_mass": "engine_mass_kg", "gap": "gap_m", "k_engine": "k_engine_N_per_m",
+         "k_rear": "k_rear_N_per_m"},
+        priors=engine_priors,
+    ),
+)
+
 BY_EFFECT = {c.effect: c for c in CANDIDATES}
+
+
+def measured_effects(measurement) -> tuple[str, ...]:
+    """Candidates the recording measures directly, so they belong to the base model rather
+    than to discovery: ``engine_impact`` when the engine's own motion was recorded."""
+    return ("engine_impact",) if {"engine_x_m", "engine_vx_mps"} & set(measurement.channels) else ()
+
+
+def priors_for(active, vehicle) -> dict[str, tuple[float, float]]:
+    """The priors of the candidates named in ``active`` (``Candidate.priors``)."""
+    out = {}
+    for effect in active:
+        c = BY_EFFECT[effect]
+        if c.priors is not None:
+            out.update(c.priors(vehicle))
+    return out
 
 
 def superset_template(params: Params) -> Params:
@@ -134,8 +184,8 @@ def neutral_values(vehicle) -> dict[str, float]:
 
     out = {}
     for c in CANDIDATES:
-        for f, v in c.neutral.items():
-            name = f"{c.effect}.{f}"
+        for name in c.names:
+            f, v = name.split(".", 1)[1], c.neutral[name.split(".", 1)[1]]
             if v == "vehicle":
                 field, index = VEHICLE_OVERRIDES[name]
                 v = np.asarray(getattr(vehicle, field))[index]
@@ -155,11 +205,11 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None) -> list[d
     Rules: ``k_zone`` is a factor of the current k_compression; ``"half_crush"`` is half the
     current model's maximum crush; ``"wheel_window"`` the current model's crush where the
     strongest misfit window of the front wheel angle starts (the wheels stop turning
-    there), else where the crush reaches the tyre (front overhang minus wheel radius).
+    there), else where the crush reaches the tyre (front overhang minus wheel radius);
+    ``"prior"`` the candidate's prior value (:func:`engine_priors`).
     """
     from identify.residuals import model_crush
 
-    params = fr.params
     out = []
     for start in candidate.starts:
         guess = {}
@@ -174,10 +224,12 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None) -> list[d
                         value = crush
             elif value == "vehicle":
                 value = neutral_values(vehicle)[f"{candidate.effect}.{field}"]
+            elif value == "prior":
+                value = candidate.priors(vehicle)[f"{candidate.effect}.{field}"][0]
             elif value == "half_crush":
                 value = 0.5 * float(np.max(np.asarray(fr.trajectory.crush)))
             elif field == "k_zone":
-                value = float(value) * float(params.k_compression)
+                value = float(value) * float(fr.params.k_compression)
             guess[f"{candidate.effect}.{field}"] = float(value)
         out.append(guess)
     return out
@@ -191,6 +243,7 @@ def accepted_mechanisms(values: dict[str, float], effects) -> tuple:
         c = BY_EFFECT[effect]
         if c.mechanism is None:
             continue
-        fields = {name.split(".", 1)[1]: jnp.asarray(float(values[name])) for name in c.names}
+        fields = {f: jnp.asarray(float(v)) for f, v in c.neutral.items()}
+        fields.update({name.split(".", 1)[1]: jnp.asarray(float(values[name])) for name in c.names})
         out.append(c.mechanism(**fields))
     return tuple(out)

@@ -42,6 +42,8 @@ from identify.candidates import (
     CANDIDATES,
     accepted_mechanisms,
     held_for,
+    measured_effects,
+    priors_for,
     starting_guesses,
     superset_spec,
     superset_template,
@@ -135,7 +137,10 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     five starts.
 
     ``free``: the base parameters to fit (default: all six; see
-    ``identify.model.base_parameters``); the result holds no mechanisms."""
+    ``identify.model.base_parameters``). A recording that measures a second body (the
+    engine's accelerometers) fits it as part of the base model
+    (``identify.candidates.measured_effects``), with its vehicle-file priors; the result
+    holds that mechanism and no other."""
     from identify.model import base_parameters
     from sim import make_params
 
@@ -143,9 +148,12 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     if speed_mps is not None and "impact_speed" in names:
         names.remove("impact_speed")
     template = make_params(k_compression=730e3, k_restitution=730e3, restitution=0.2, dz_contact=0.0)
+    measured = measured_effects(measurement)
     kwargs = dict(template=superset_template(template), free=superset_spec(names), speed_mps=speed_mps,
-                  held=held_for((), vehicle))
-    fr = fit(measurement, vehicle, options=options, progress=progress, require_convergence=False, **kwargs)
+                  held=held_for(measured, vehicle), priors=priors_for(measured, vehicle))
+    initial = {k: v for e in measured for k, v in starting_guesses(BY_EFFECT[e], None, vehicle)[0].items()}
+    fr = fit(measurement, vehicle, options=options, progress=progress, require_convergence=False, initial=initial,
+             **kwargs)
     multi = fr  # the multi-start search; continuations below start once from its best
     for _ in range(5):  # continue the best start while the step limit stopped it
         if fr.converged:
@@ -159,7 +167,7 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
         )
     fr = dataclasses.replace(fr, starts=multi.starts, starts_at_best=multi.starts_at_best,
                              other_minima=multi.other_minima)
-    return _final(fr, ())
+    return _final(fr, measured)
 
 
 def plot_discovery(result: "DiscoveryResult", out_dir, vehicle=None) -> list[str]:
@@ -297,6 +305,10 @@ _ZERO_IS_OFF = {"progressive_stiffness": ("progressive_stiffness.progression",),
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     """'' when the fitted mechanism acts inside the recorded crash, else why not."""
     crush_max = float(np.max(np.asarray(fr.trajectory.crush)))
+    conflicts = [f"{n} {p['pull']:+.1f} sigma" for n, p in fr.pulls().items() if p["conflict"]]
+    if conflicts:
+        return ("its fit pulls what was known before the fit beyond 3 sigma (" + ", ".join(conflicts) +
+                "): it trades against the prior rather than explaining the misfit")
     for p in BY_EFFECT[effect].parameters:
         value, sd = fr.values[p.name], fr.std[p.name]
         if not np.isfinite(sd):
@@ -311,6 +323,8 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
         name = "rear_axle_lift.rear_axle_stiffness"
         if abs(fr.values[name] - neutral_values(vehicle)[name]) < 3 * fr.std[name]:
             return "the rear axle's stiffness does not differ from the vehicle file's"
+    if effect == "engine_impact" and float(np.max(np.asarray(fr.trajectory.engine_force))) <= 0.0:
+        return "the engine never reaches the barrier in the recorded crash"
     if effect == "rate_dependence" and fr.values["rate_dependence.rate_coefficient"] <= 0:
         return "a negative rate coefficient (the structure softer when crushed fast) is not physical"
     for name in _ZERO_IS_OFF.get(effect, ()):
@@ -350,10 +364,13 @@ def discover(
     template = superset_template(base.params)
     fopts = dataclasses.replace(options.fit, solver=options.fit.solver)
 
+    measured = measured_effects(measurement)
+
     def run(active, initial, meas=measurement):
         label = "+".join(("base", *active))
         return fit(meas, vehicle, template=template, free=spec, initial=initial, options=fopts,
-                   speed_mps=speed_mps, model=label, held=held_for(active, vehicle), require_convergence=False)
+                   speed_mps=speed_mps, model=label, held=held_for(active, vehicle), require_convergence=False,
+                   priors=priors_for(active, vehicle))
 
     def run_to_convergence(active, initial):
         """A candidate fit, continued from where it stopped while the step limit stopped it
@@ -366,11 +383,11 @@ def discover(
         return fr
 
     say("discovery: refitting the base model")
-    current = run((), dict(base.values))
+    current = run(measured, dict(base.values))
     start = current
     before = analyse(current, window_ms=options.window_ms, threshold=options.threshold)
     screen = not before.white or any(c.ljung_box_p < 1e-3 for c in before.channels.values())
-    accepted: list[str] = []
+    accepted: list[str] = list(measured)
     discoveries: list[dict] = []
     rounds: list[list[Trial]] = []
     folds = _cv_folds(measurement, options.cv_block_ms)
@@ -383,7 +400,7 @@ def discover(
         return cv_cache[key]
 
     now = before
-    while screen and len(accepted) < options.max_effects:
+    while screen and len(accepted) - len(measured) < options.max_effects:
         trials, fits = [], {}
         todo = [c for c in CANDIDATES if c.effect not in accepted]
         for i, c in enumerate(todo):

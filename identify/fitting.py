@@ -28,7 +28,8 @@ from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
 
-FIT_CHANNELS = ("x_m", "z_m", "pitch_rad", "vx_mps", "front_wheel_angle_rad", "rear_wheel_angle_rad")
+FIT_CHANNELS = ("x_m", "z_m", "pitch_rad", "vx_mps", "front_wheel_angle_rad", "rear_wheel_angle_rad",
+                "engine_x_m", "engine_vx_mps")
 
 # When a parameter's standard deviation exceeds this, the data do not constrain it.
 NOT_IDENTIFIED = {
@@ -105,6 +106,21 @@ class FitResult:
     measurement: Measurement
     model: str = "base"
     correlation_time: dict[str, float] = dataclasses.field(default_factory=dict)
+    priors: dict[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
+
+    PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
+
+    def pulls(self) -> dict[str, dict]:
+        """name -> {prior, prior_std, value, std, pull, conflict} for each fitted quantity
+        that had a prior: pull = (fitted - prior) / prior sigma; beyond ``PULL_CONFLICT``
+        sigma the model and the recording disagree with the prior knowledge."""
+        out = {}
+        for name, (mu, sigma) in self.priors.items():
+            if name in self.values:
+                pull = (self.values[name] - mu) / sigma
+                out[name] = {"prior": mu, "prior_std": sigma, "value": self.values[name], "std": self.std[name],
+                             "pull": pull, "conflict": bool(abs(pull) > self.PULL_CONFLICT)}
+        return out
 
     @property
     def rms_m(self) -> float:
@@ -184,6 +200,8 @@ def _residual_fn(spec, channels, n_out, solver):
                 diff = diff - jnp.sum(w * w * diff) / jnp.maximum(jnp.sum(w * w), 1e-300)
             out.append(w * diff)
         out.append(jnp.atleast_1d((speed - data["speed_prior"]) * data["speed_prior_w"]))
+        values = _values(spec, u, data)
+        out.append(jnp.stack([(values[p.name] - data["prior_mu"][i]) * data["prior_w"][i] for i, p in enumerate(spec)]))
         return jnp.concatenate(out)
 
     return residuals
@@ -266,6 +284,7 @@ def fit(
     progress=None,
     held: dict | None = None,
     require_convergence: bool = True,
+    priors: dict | None = None,
 ) -> FitResult:
     """Fit ``free`` parameters of the model to ``measurement``.
 
@@ -285,6 +304,8 @@ def fit(
         the result reports only the fitted names).
     require_convergence : raise when the best start did not converge and misfits badly;
         False returns it (a caller that continues the fit from it decides).
+    priors : name -> (value, sigma) in physical units: what is known of a fitted quantity
+        before the fit (a vehicle file's estimate), a residual (fitted - value) / sigma.
 
     Returns
     -------
@@ -317,6 +338,7 @@ def fit(
         **(initial or {}),
     }
     measured_prior = speed_mps is None and measurement.impact_speed_sigma
+    priors = dict(priors or {})
     data = dict(
         t=jnp.asarray(measurement.t),
         y=jnp.asarray(y),
@@ -328,6 +350,9 @@ def fit(
         speed_prior_w=jnp.asarray(1.0 / measurement.impact_speed_sigma if measured_prior else 0.0),
         mask=jnp.asarray([0.0 if p.name in held else 1.0 for p in free]),
         held=jnp.asarray([float(held.get(p.name, 0.0)) for p in free]),
+        prior_mu=jnp.asarray([float(priors[p.name][0]) if p.name in priors else 0.0 for p in free]),
+        prior_w=jnp.asarray([1.0 / float(priors[p.name][1]) if p.name in priors and p.name not in held else 0.0
+                             for p in free]),
     )
     duration = float(measurement.t.max()) + 0.002 + 0.010  # room for the contact-time shift
     n_out = int(math.ceil(duration / options.solver.output_dt)) + 2
@@ -355,7 +380,7 @@ def fit(
     fitted = [i for i, p in enumerate(free) if p.name not in held]
     jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
     spec_all, free = free, tuple(free[i] for i in fitted)
-    n_res = int(np.sum(w > 0)) + (1 if measured_prior else 0)
+    n_res = int(np.sum(w > 0)) + (1 if measured_prior else 0) + int(np.count_nonzero(np.asarray(data["prior_w"])))
     chi2 = float(r @ r)
     dof = max(n_res - len(free), 1)
     scale = max(1.0, chi2 / dof)
@@ -424,6 +449,7 @@ def fit(
         measurement=measurement,
         model=model,
         correlation_time=tau,
+        priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
     )
     result.identified = assess_identifiability(result, channels)
     if require_convergence and not result.converged and result.reduced_chi2 > 100:

@@ -13,8 +13,8 @@ itself; comparing the model's predicted force with it is a test nobody can tune 
   cells like a prediction, it shows how much of the force's mismatch no one-body model
   fitted to the motion can remove (the car is not rigid: its engine and cabin stop at
   different times);
-- :func:`compare_forces`: peak force and impulse errors and the ISO/TS 18571 objective
-  rating (:func:`iso18571`);
+- :func:`compare_forces`: peak force and impulse errors, the RMS error over the peak
+  (NRMSE) and the ISO/TS 18571 objective rating (:func:`iso18571`);
 - :func:`write_forces_csv`, :func:`plot_force_time`, :func:`plot_force_crush`: the
   ``forces.csv`` of ``docs/interface.md`` and two PNG plots.
 - :func:`model_force`: a simulated force on the measurement's clock, CFC-filtered as the cells;
@@ -118,6 +118,8 @@ class ForceComparison:
     window_ms : tuple of float
         Evaluation interval, ms after contact.
     iso18571 : Iso18571
+    nrmse : float
+        Root-mean-square of (predicted - measured) over the window, over the measured peak, 1.
     """
 
     peak_measured_N: float
@@ -130,6 +132,7 @@ class ForceComparison:
     impulse_error: float
     window_ms: tuple[float, float]
     iso18571: Iso18571
+    nrmse: float
 
     def to_dict(self) -> dict:
         """JSON-ready dictionary (the ISO scores nested under ``iso18571``)."""
@@ -413,7 +416,8 @@ def compare_forces(t: np.ndarray, measured: np.ndarray, t_pred: np.ndarray, pred
         peak_error=float(fp[ip] / fm[im] - 1.0),
         peak_time_measured_ms=float(grid[im] * 1e3), peak_time_predicted_ms=float(grid[ip] * 1e3),
         impulse_measured_Ns=imp_m, impulse_predicted_Ns=imp_p, impulse_error=imp_p / imp_m - 1.0,
-        window_ms=(t0 * 1e3, t1 * 1e3), iso18571=iso18571(fm, fp, 1.0 / ISO_RATE_HZ))
+        window_ms=(t0 * 1e3, t1 * 1e3), iso18571=iso18571(fm, fp, 1.0 / ISO_RATE_HZ),
+        nrmse=float(np.sqrt(np.mean((fp - fm) ** 2)) / fm[im]))
 
 
 def _atomic_write(path: Path, write) -> None:
@@ -451,10 +455,10 @@ def _figure():
 
 
 def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceComparison | None = None,
-                    title: str = "", rigid=None, base=None) -> None:
+                    title: str = "", rigid=None, base=None, base_label: str = "base model, before discovery") -> None:
     """PNG of measured and predicted force (kN) against time (ms); optional (t_ms, N)
     curves: ``rigid`` (:func:`rigid_body_force`, thin grey) and ``base`` (the base model
-    before discovery, dashed)."""
+    before discovery, or the one-body model beside a two-body one: ``base_label``, dashed)."""
     plt = _figure()
     fig, ax = plt.subplots(figsize=(8, 4.5))
     if rigid is not None:
@@ -463,7 +467,7 @@ def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceCompar
     ax.plot(t_ms, np.asarray(measured_N) / 1e3, color="k", label="measured (barrier load cells, CFC 60)")
     if base is not None:
         ax.plot(base[0], np.asarray(base[1]) / 1e3, color="tab:blue", ls="--", lw=1.2,
-                label="base model, before discovery (same CFC)")
+                label=f"{base_label} (same CFC)")
     ax.plot(t_ms, np.asarray(predicted_N) / 1e3, color="tab:red", label="predicted (model, same CFC)")
     ax.set_xlabel("time after first contact (ms)")
     ax.set_ylabel("contact force (kN)")
@@ -480,12 +484,20 @@ def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceCompar
 
 
 def plot_force_crush(path, crush_measured_m, force_measured_N, crush_predicted_m, force_predicted_N,
-                     title: str = "") -> None:
-    """PNG of force (kN) against crush (m), measured and predicted."""
+                     title: str = "", engine=None) -> None:
+    """PNG of force (kN) against crush (m), measured and predicted; ``engine`` (engine crush
+    (m), engine force (N), structure force (N)) adds each body's own curve of a two-body model."""
     plt = _figure()
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    ax.plot(crush_measured_m, np.asarray(force_measured_N) / 1e3, color="k", label="measured")
-    ax.plot(crush_predicted_m, np.asarray(force_predicted_N) / 1e3, color="tab:red", label="predicted")
+    ax.plot(crush_measured_m, np.asarray(force_measured_N) / 1e3, color="k", label="measured (barrier load cells)")
+    ax.plot(crush_predicted_m, np.asarray(force_predicted_N) / 1e3, color="tab:red", label="predicted, whole barrier")
+    if engine is not None:
+        crush_e, force_e, force_s = engine
+        ax.plot(crush_predicted_m, np.asarray(force_s) / 1e3, color="tab:orange", ls="--",
+                label="predicted, front structure vs cabin crush")
+        hit = np.asarray(crush_e) > 0
+        ax.plot(np.asarray(crush_e)[hit], np.asarray(force_e)[hit] / 1e3, color="tab:purple", ls=":",
+                label="predicted, engine block vs its own crush")
     ax.set_xlabel("crush (m)")
     ax.set_ylabel("contact force (kN)")
     if title:
@@ -524,7 +536,8 @@ def model_force(traj, contact_time_s: float, cfc: int) -> tuple[np.ndarray, np.n
 
 
 def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
-                 contact_time_s: float = 0.0, title: str = "", rigid=None, base=None) -> ForceComparison:
+                 contact_time_s: float = 0.0, title: str = "", rigid=None, base=None,
+                 base_label: str = "base model, before discovery") -> ForceComparison:
     """Compare a simulated trajectory's contact force, filtered with the load cells' CFC
     class, with the barrier's; write ``forces.csv``, ``force_time.png`` and
     ``force_crush.png`` into ``out_dir``.
@@ -571,19 +584,23 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
         return None if curve is None else (grid * 1e3, np.interp(grid, curve[0], curve[1], left=0.0, right=0.0))
 
     plot_force_time(out / "force_time.png", grid * 1e3, fm_grid, fp_grid, comparison, title, on_grid(rigid),
-                    on_grid(base))
+                    on_grid(base), base_label)
     end = comparison.window_ms[1] / 1e3
     tm = np.asarray(measurement.t)
     keep = tm <= end
     model = tp <= end
+    engine = None
+    if float(np.max(np.asarray(traj.engine_force))) > 0.0:  # a two-body model: each body's own curve
+        engine = (np.asarray(traj.engine_crush)[model], np.asarray(traj.engine_force)[model],
+                  (np.asarray(traj.force) - np.asarray(traj.engine_force))[model])
     plot_force_crush(out / "force_crush.png", np.asarray(measurement.channels["x_m"])[keep],
                      np.interp(tm[keep], force.t, force.force), np.asarray(traj.crush)[model],
-                     fp[model], title)
+                     fp[model], title, engine)
     return comparison
 
 
 def force_check_document(test, measurement, traj, out_dir: str | Path, contact_time_s: float = 0.0,
-                         title: str = "", base=None) -> dict:
+                         title: str = "", base=None, base_label: str = "base model, before discovery") -> dict:
     """Everything the force check produces for a fitted sensor test, in one call.
 
     Parameters
@@ -602,7 +619,8 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
         Title of the plots.
     base : (sim.Trajectory, contact time (s)), optional
         The base model's fit, when ``traj`` is a model with discovered mechanisms: scored
-        too (``"base_model"``) and drawn in the force-time plot.
+        too (``"base_model"``) and drawn in the force-time plot; or the one-body model beside
+        a two-body one (``base_label`` says which, also in ``"base_model"["label"]``).
 
     Returns
     -------
@@ -632,7 +650,8 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
     base_curve = None
     if base is not None:
         base_curve = model_force(base[0], base[1], force.cfc)
-        doc["base_model"] = compare_forces(force.t, force.force, *base_curve).to_dict()
-    comparison = check_forces(force, traj, measurement, out_dir, contact_time_s, title, rigid, base_curve)
+        doc["base_model"] = {"label": base_label, **compare_forces(force.t, force.force, *base_curve).to_dict()}
+    comparison = check_forces(force, traj, measurement, out_dir, contact_time_s, title, rigid, base_curve,
+                              base_label)
     doc.update(comparison.to_dict())
     return doc

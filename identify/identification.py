@@ -29,6 +29,8 @@ class Identification:
     vehicle : sim.Vehicle.
     out : the results folder, or None when nothing was written.
     discovery : identify.discovery.DiscoveryResult, or None with ``discover=False``.
+    one_body : FitResult of the one-body base model on the cabin's channels alone, when the
+        recording measured a second body (the engine) and has load cells to score both on.
     """
 
     document: dict
@@ -37,6 +39,7 @@ class Identification:
     vehicle: object
     out: Path | None = None
     discovery: object = None
+    one_body: FitResult | None = None
 
     @property
     def parameters(self) -> dict:
@@ -112,6 +115,11 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
     for key in fr.names:  # a discovered mechanism's parameters: "stiffness_zone.depth"
         if "." in key:
             params[key] = {"value": fr.values[key], "unit": fr.units[key], "std": fr.std[key], "identified": True}
+            if key in fr.priors and fr.std[key] > PRIOR_NARROWING * fr.priors[key][1]:
+                mu, sigma = fr.priors[key]
+                params[key].update(identified=False, reason=(
+                    f"not identified: the recording barely narrows what was known before the fit ({mu:.4g} +-"
+                    f" {sigma:.2g} {fr.units[key]}; fitted +- {fr.std[key]:.2g})"))
     model_events = {k: (v + fr.contact_time * 1e3 if v is not None else None) for k, v in events_ms(fr.trajectory).items()}
     tracks = recording.tracks
     doc = {
@@ -147,11 +155,12 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             "derived_channels": [c for c in fr.rms if c in fr.measurement.derived],
             "correlation_time_samples": dict(fr.correlation_time),  # integrated autocorrelation time of each residual
         },
+        "priors": fr.pulls(),
         "discoveries": list(discoveries),
         "discovery_status": discovery_status,
         "events_ms": dict(fr.measurement.events_ms),
         "model_events_ms": model_events,
-        "notes": list(fr.measurement.notes),
+        "notes": list(fr.measurement.notes) + _second_body_notes(fr, recording),
     }
     if tracks is not None:
         doc["contact_frame"] = int(tracks.contact_frame)
@@ -159,6 +168,11 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         doc["scale_std_m_per_px"] = float(tracks.scale_sigma)
         doc["fps"] = float(tracks.fps)
     return doc
+
+
+# a parameter with a prior counts as identified when the fit's std is below this share of the
+# prior's: the recording, not the prior, decides its value
+PRIOR_NARROWING = 0.5
 
 
 def _unit(name):
@@ -186,10 +200,15 @@ def write_results(out, ident: Identification, default_traj) -> Path:
             from identify.force_check import force_check_document
 
             start = ident.discovery.start if ident.discovery is not None else None
-            base = (start.trajectory, start.contact_time) if start is not None and fr.model != "base" else None
+            base, base_label = None, "base model, before discovery"
+            if ident.one_body is not None:
+                base, base_label = (ident.one_body.trajectory, ident.one_body.contact_time), "one-body base model"
+            elif start is not None and fr.model != start.model:
+                base = (start.trajectory, start.contact_time)
             ident.document["force_check"] = force_check_document(
                 rec.sensor_test, fr.measurement, fr.trajectory, tmp, fr.contact_time,
-                title=f"{vehicle.name}: barrier load cells vs fitted model ({fr.model})", base=base)
+                title=f"{vehicle.name}: barrier load cells vs fitted model ({fr.model})", base=base,
+                base_label=base_label)
             forces = ["force_time.png", "force_crush.png"]
         (tmp / "result.json").write_text(dumps(ident.document))
         if rec.tracks is not None:
@@ -330,9 +349,18 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         found = discover_missing(rec.measurement, veh, base, progress=say)
         fr, discoveries, status = found.final, found.discoveries, found.status
         say(f"discovery: {status}")
+        one_body = _one_body_reference(rec, veh, free, base_options, speed_mps, say)
     else:
         say("fitting the collision model (the first run compiles it: ~15 s)")
-        fr = fit_measurement(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
+        from identify.candidates import measured_effects
+
+        if measured_effects(rec.measurement):  # a second measured body (the engine) is part of the base model
+            from identify.discovery import fit_base
+
+            fr = fit_base(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
+        else:
+            fr = fit_measurement(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
+        one_body = _one_body_reference(rec, veh, free, options, speed_mps, say)
         discoveries, status = [], "discovery of missing physics was switched off (--no-discover)"
     doc = result_document(fr, rec, veh, discoveries=discoveries, discovery_status=status, held=held,
                           vehicle_ref=vehicle_reference(vehicle))
@@ -341,14 +369,45 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         # the multi-start search is the base model's; discovery refines from its best fit
         doc["fit"]["starts"], doc["fit"]["starts_at_best"] = base.starts, base.starts_at_best
         doc["fit"]["starts_of"] = "base model"
+    for name, p in doc["priors"].items():
+        if p["conflict"]:
+            warnings.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"
+                            f" the fit ({p['prior']:.4g} +- {p['prior_std']:.2g}): the model and the recording"
+                            " disagree there")
     if warnings:
         doc["warnings"] = list(warnings)
-    ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh, discovery=found)
+    ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh, discovery=found, one_body=one_body)
     if folder is not None:
         say(f"writing {folder.out}")
         default_traj = simulate(named_params("vsim_default"), veh, fr.speed, duration=float(fr.measurement.t.max()) + 0.001)
         ident.out = write_results(folder, ident, default_traj)
     return ident
+
+
+def _second_body_notes(fr, recording) -> list[str]:
+    """What a sensor recording without engine accelerometers cannot tell of the engine."""
+    if recording.sensor_test is None or "engine_vx_mps" in fr.measurement.channels:
+        return []
+    return ["no valid engine accelerometer in the recording: the engine's own motion is not measured, so the"
+            " engine is not fitted as a second body; its impact on the barrier can only be inferred by discovery"
+            " (engine_impact), with the engine's mass and gap from the vehicle file's estimates, and is reported"
+            " as not identified where the motion barely narrows them"]
+
+
+def _one_body_reference(rec, veh, free, options, speed_mps, say):
+    """The one-body base model fitted to the cabin's channels alone, when the recording
+    measured the engine too (so the fitted model has two bodies) and has load cells that
+    can score both; else None."""
+    from identify.candidates import measured_effects
+    from identify.discovery import fit_base
+
+    m = rec.measurement
+    if not measured_effects(m) or rec.sensor_test is None or not rec.sensor_test.barrier:
+        return None
+    cabin = dataclasses.replace(m, channels={k: v for k, v in m.channels.items() if not k.startswith("engine_")},
+                                sigma={k: v for k, v in m.sigma.items() if not k.startswith("engine_")})
+    say("fitting the one-body base model to the cabin alone (for the load-cell comparison)")
+    return fit_base(cabin, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
 
 
 def vehicle_label(name_or_path) -> str:

@@ -12,6 +12,8 @@ names and units:
 | ``vx_mps`` | m/s | CG velocity towards the barrier |
 | ``crush_m`` | m | front-end crush |
 | ``front_wheel_angle_rad``, ``rear_wheel_angle_rad`` | rad | wheel spin, forward positive |
+| ``engine_x_m`` | m | engine CG displacement from first contact, towards the barrier |
+| ``engine_vx_mps`` | m/s | engine CG velocity towards the barrier |
 
 Other channels may ride along (``force_N`` for a barrier's summed load cells); the fit uses
 those it knows.
@@ -36,6 +38,8 @@ KNOWN_CHANNELS = {
     "crush_m": "m",
     "front_wheel_angle_rad": "rad",
     "rear_wheel_angle_rad": "rad",
+    "engine_x_m": "m",
+    "engine_vx_mps": "m/s",
     "force_N": "N",
 }
 
@@ -114,7 +118,7 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
 
     A channel without a sigma column gets ``sigma_floor`` in its unit: say so in notes.
     With both ``x_m`` and ``vx_mps``, the velocity is taken as derived from the displacement
-    (as the video stage derives it) and not fitted.
+    (as the video stage derives it) and not fitted; the engine's likewise.
     """
     path = Path(path)
     import io
@@ -151,6 +155,6 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
             sigma[name] = np.full(len(data), sigma_floor)
             notes.append(f"{name}: no sigma column, {sigma_floor:g} assumed")
         channels[name] = cols[name]
-    derived = ("vx_mps",) if {"x_m", "vx_mps"} <= set(channels) else ()
+    derived = tuple(v for x, v in (("x_m", "vx_mps"), ("engine_x_m", "engine_vx_mps")) if {x, v} <= set(channels))
     return Measurement(t=cols["t_ms"] / 1000.0, channels=channels, sigma=sigma, source=str(path), notes=tuple(notes),
                        derived=derived)

@@ -153,7 +153,8 @@ def predict(traj, channel: str, t, speed, contact_time, wheel_radius, h: float):
 
     Model time is ``t - contact_time``; before the model's first contact the car moves at
     ``speed`` with its wheels rolling. ``x_m`` is the displacement from where the car was at
-    the measurement's t = 0 (the tracks.csv definition); other channels are returned as they
+    the measurement's t = 0 (the tracks.csv definition), ``engine_x_m`` likewise for the
+    engine (``sim.mechanisms.EngineImpact``; without it the engine moves with the cabin); other channels are returned as they
     are (the fit removes their constant offsets).
     """
     s = t - contact_time
@@ -165,6 +166,10 @@ def predict(traj, channel: str, t, speed, contact_time, wheel_radius, h: float):
             return jnp.where(before, speed * s_, after)
         if channel == "vx_mps":
             return jnp.where(before, speed, _linear(traj.vx, s_, h))
+        if channel == "engine_x_m":
+            return jnp.where(before, speed * s_, _hermite(traj.engine_x, traj.engine_vx, s_, h))
+        if channel == "engine_vx_mps":
+            return jnp.where(before, speed, _linear(traj.engine_vx, s_, h))
         if channel == "z_m":
             return jnp.where(before, 0.0, _hermite(traj.z, traj.vz, s_, h))
         if channel == "pitch_rad":
@@ -180,7 +185,7 @@ def predict(traj, channel: str, t, speed, contact_time, wheel_radius, h: float):
         raise ValueError(f"no model prediction for channel {channel!r}")
 
     value = ext(s)
-    if channel == "x_m":
+    if channel in ("x_m", "engine_x_m"):
         value = value - ext(-contact_time)
     return value
 

@@ -99,7 +99,10 @@ def load_recording(
 
     if is_recording(path):
         test = read_recording(path, progress=progress)
-        measurement = dataclasses.replace(measurement_from_test(test), derived=("x_m",))
+        measurement = measurement_from_test(test)
+        # displacements are integrated from the velocities: plotted, not fitted twice
+        derived = tuple(n for n in ("x_m", "engine_x_m") if n in measurement.channels)
+        measurement = dataclasses.replace(measurement, derived=derived)
         return Recording(measurement, "sensors", path, sensor_test=test)
     if path.is_dir() or path.suffix.lower() in VIDEO_SUFFIXES:
         from video.io import open_film

@@ -106,17 +106,18 @@ def _force_check_lines(check: dict, doc: dict) -> list[str]:
         f"Measured: peak {check['peak_measured_N'] / 1e3:.0f} kN at {check['peak_time_measured_ms']:.0f} ms,"
         f" impulse {check['impulse_measured_Ns'] / 1e3:.2f} kN s (CFC {check['cfc']}).",
         "",
-        "| force | peak | peak error | impulse error | ISO 18571 (1 = identical) |",
-        "| --- | --- | --- | --- | --- |",
+        "| force | peak | peak error | impulse error | RMS error / peak | ISO 18571 (1 = identical) |",
+        "| --- | --- | --- | --- | --- | --- |",
     ]
     rows = [(f"fitted model (`{model}`)", check)]
     if "base_model" in check:
-        rows.append(("base model, before discovery", check["base_model"]))
+        rows.append((check["base_model"].get("label", "base model, before discovery"), check["base_model"]))
     if "rigid_body" in check:
         rows.append(("a rigid car moving exactly as measured (test mass x measured deceleration)", check["rigid_body"]))
     for label, c in rows:
         lines.append(f"| {label} | {c['peak_predicted_N'] / 1e3:.0f} kN at {c['peak_time_predicted_ms']:.0f} ms |"
                      f" {100 * c['peak_error']:+.1f} % | {100 * c['impulse_error']:+.1f} % |"
+                     f" {100 * c['nrmse']:.1f} % |"
                      f" {c['iso18571']['overall']:.3f} |")
     lines.append("")
     turn = (doc.get("model_events_ms") or {}).get("compression_end")
@@ -125,11 +126,16 @@ def _force_check_lines(check: dict, doc: dict) -> list[str]:
         lines.append(f"- the fitted model's peak is where its force jumps from the loading curve to the unloading"
                      f" line ({turn:.0f} ms); the jump's height depends on k_restitution, which this recording"
                      " does not identify: its peak error says little")
-    if "rigid_body" in check:
+    two_body = "engine_impact" in model
+    if "rigid_body" in check and not two_body:
         lines.append("- a one-body model's force is its mass times its own deceleration, so a model that fits the"
                      " motion better moves its force towards the rigid car's row: what separates that row from the"
                      " load cells is the car's own deformation (its engine and cabin stop at different times),"
                      " not the force law")
+    if two_body:
+        lines.append("- the fitted model has two bodies, the cabin and the engine (`engine_impact`): its barrier force"
+                     " is the structure's plus the engine block's, which a one-body model's (its mass times the"
+                     " cabin's deceleration) cannot be; force vs crush shows each body's own curve")
     if "momentum_check" in check:
         mc = check["momentum_check"]
         each = mc.get("per_accelerometer", {})

@@ -14,6 +14,7 @@ from sim.errors import ConfigError as ConfigError
 from sim.events import events_ms as events_ms
 from sim.mechanisms import (
     MECHANISMS as MECHANISMS,
+    EngineImpact as EngineImpact,
     FrontWheelBlock as FrontWheelBlock,
     Mechanism as Mechanism,
     ProgressiveStiffness as ProgressiveStiffness,

@@ -70,9 +70,9 @@ class Trajectory(eqx.Module):
     front_margin, rear_margin (N, axle contact margins, negative while the wheel is off
     the ground); front_lift, rear_lift (m, axle height above the wheel-touching height);
     front_blocked (0..1); front_wheel_angle, rear_wheel_angle (rad, forward rolling
-    positive); contact_impulse (N s) and contact_work (J, integral of F dd: rises while
-    crushing, falls by the energy given back) and energy_absorbed (J, work on the loading
-    curve), all cumulative from t = 0.
+    positive); contact_impulse (N s, of the whole barrier force) and contact_work (J, integral
+    of the structure's F dd: rises while crushing, falls by the energy given back) and
+    energy_absorbed (J, the structure's work on the loading curve), all cumulative from t = 0.
     """
 
     t: jnp.ndarray
@@ -85,6 +85,11 @@ class Trajectory(eqx.Module):
     crush: jnp.ndarray
     crush_max: jnp.ndarray
     force: jnp.ndarray
+    engine_x: jnp.ndarray
+    engine_vx: jnp.ndarray
+    engine_force: jnp.ndarray
+    engine_crush: jnp.ndarray
+    mounts_broken: jnp.ndarray
     front_normal: jnp.ndarray
     rear_normal: jnp.ndarray
     front_margin: jnp.ndarray
@@ -112,6 +117,7 @@ class _State(NamedTuple):
     wheel_angle: jnp.ndarray  # (2,) rad
     impulse: jnp.ndarray  # N s
     work: jnp.ndarray  # J
+    bodies: tuple  # each body mechanism's own state (sim.mechanisms.Mechanism.body_init)
 
 
 def _front_blocked(crush, params, vehicle):
@@ -121,16 +127,25 @@ def _front_blocked(crush, params, vehicle):
     return blocked
 
 
+def _bodies(params: Params):
+    return tuple(m for m in params.mechanisms if m.has_body)
+
+
 def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     """One integration step; returns the new state and the observations at its start."""
     dt = solver.dt
     q, v = state.q, state.v
-    inv_mass = jnp.stack([1.0 / vehicle.mass, 1.0 / vehicle.mass, 1.0 / vehicle.pitch_inertia])
+    bodies = _bodies(params)
+    cabin_mass = vehicle.mass - sum(b.detached_mass() for b in bodies)
+    inv_mass = jnp.stack([1.0 / cabin_mass, 1.0 / vehicle.mass, 1.0 / vehicle.pitch_inertia])
 
     crush, jac = contact_geometry(q, vehicle, params.dz_contact)
     crush_rate = jac @ v
     blocked = _front_blocked(crush, params, vehicle)
     other, normal, margin, lift, axle_speed = ground_forces(q, v, vehicle, params, blocked, solver)
+    body_out = [b.body_forces(s, q, v) for b, s in zip(bodies, state.bodies)]
+    body_barrier = sum((f_barrier for _, f_barrier, _ in body_out), jnp.zeros_like(crush))
+    other = other + jnp.stack([sum((f for f, _, _ in body_out), jnp.zeros_like(crush)), 0.0 * crush, 0.0 * crush])
     accel_other = other * inv_mass
     accel_per_newton = -jac * inv_mass
 
@@ -152,18 +167,25 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     absorbed = jnp.where(grows, 0.5 * (f_load + f_load_new) * (crush_new - crush), 0.0)
 
     rolling = jnp.stack([1.0 - blocked, jnp.ones_like(blocked)])
+    new_bodies = tuple(b.body_advance(s, out[:2], out[2], q_new, v_new, dt)
+                       for b, s, out in zip(bodies, state.bodies, body_out))
+    engine = dict(engine_x=q[0], engine_vx=v_mid[0], engine_force=jnp.zeros_like(crush),
+                  engine_crush=jnp.zeros_like(crush), mounts_broken=jnp.zeros_like(crush))
+    for b, s, s_new, out in zip(bodies, state.bodies, new_bodies, body_out):
+        engine = b.body_observed(s, s_new, out[1])
     new_state = _State(
         q=q_new,
         v=v_new,
         crush_max=jnp.maximum(state.crush_max, crush_new),
         energy_absorbed=state.energy_absorbed + absorbed,
         wheel_angle=state.wheel_angle + dt * rolling * axle_speed / vehicle.wheel_radius,
-        impulse=state.impulse + dt * force,
+        impulse=state.impulse + dt * (force + body_barrier),
         work=state.work + dt * force * (jac @ v_mid),
+        bodies=new_bodies,
     )
     observed = dict(
         x=q[0], z=q[1], pitch=q[2], vx=v_mid[0], vz=v_mid[1], pitch_rate=v_mid[2],
-        crush=crush, crush_max=state.crush_max, force=force,
+        crush=crush, crush_max=state.crush_max, force=force + body_barrier, **engine,
         front_normal=normal[0], rear_normal=normal[1],
         front_margin=margin[0], rear_margin=margin[1],
         front_lift=lift[0], rear_lift=lift[1], front_blocked=blocked,
@@ -184,6 +206,7 @@ def _run(params: Params, vehicle: Vehicle, speed, n_out: int, solver: Solver) ->
         wheel_angle=jnp.stack([zero, zero]),
         impulse=zero,
         work=zero,
+        bodies=tuple(b.body_init(speed + zero) for b in _bodies(params)),
     )
     substeps = solver.substeps
 

@@ -66,6 +66,9 @@ class Vehicle(eqx.Module):
     axle_damping : (2,) N s/m, front then rear.
     silhouette_side : ((x, z), ...) m, side outline, x forward from the rear bumper, z up.
     windscreen_top : (x, z) m, the roof edge at the top of the windscreen, or None.
+    engine_mass : kg, the engine and gearbox (the second body of
+        ``sim.mechanisms.EngineImpact``), or None when the file does not say.
+    engine_gap : m, structure crush at which the engine meets the barrier, or None.
     """
 
     mass: jnp.ndarray
@@ -85,6 +88,8 @@ class Vehicle(eqx.Module):
     name: str = eqx.field(static=True)
     silhouette_side: tuple = eqx.field(static=True, default=())
     windscreen_top: tuple | None = eqx.field(static=True, default=None)
+    engine_mass: float | None = eqx.field(static=True, default=None)
+    engine_gap: float | None = eqx.field(static=True, default=None)
 
     @property
     def cg_to_rear_axle(self):
@@ -206,6 +211,17 @@ def vehicle_from_dict(d: dict, key: str = "vehicle", source: str = "vehicle") ->
     if top is not None:
         top = _polygon([top], source, field="windscreen_top", min_points=1)[0]
 
+    engine = {}
+    for field in ("engine_mass", "engine_gap"):
+        if field in d:
+            engine[field] = number(field)
+    if "engine_mass" in engine and not 0.0 < engine["engine_mass"] < 0.4 * values["mass"]:
+        raise ConfigError(f"{source}: field 'engine_mass' ({engine['engine_mass']}) must be between 0 and 40 % of"
+                          f" 'mass' ({values['mass']})")
+    if "engine_gap" in engine and not 0.0 < engine["engine_gap"] < values["front_overhang"] + values["cg_to_front_axle"]:
+        raise ConfigError(f"{source}: field 'engine_gap' ({engine['engine_gap']}) must be > 0 and less than the"
+                          f" distance from the front bumper to the CG")
+
     name = d.get("name", key)
     if not isinstance(name, str):
         raise ConfigError(f"{source}: field 'name' must be a string, got {name!r}")
@@ -217,6 +233,7 @@ def vehicle_from_dict(d: dict, key: str = "vehicle", source: str = "vehicle") ->
         name=name,
         silhouette_side=silhouette,
         windscreen_top=top,
+        **engine,
     )
 
 

@@ -70,20 +70,29 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     for name in ("force_time.png", "force_crush.png"):
         assert (out / name).stat().st_size > 100
     assert "force_time.png" in (out / "report.md").read_text()
-    # discovery ran on the motion: every candidate tried is listed with its verdict
+    # the engine's accelerometer (curve 095) makes the engine a second measured body: its
+    # velocity is fitted, its mass and gap start from the vehicle file's estimates (priors)
+    assert "engine_impact" in doc["fit"]["model"] and "engine_vx_mps" in doc["fit"]["fitted_channels"]
+    assert doc["priors"]["engine_impact.engine_mass"]["prior"] == 230.0  # data/vehicles/toyota_camry_2018.toml
+    assert doc["priors"]["engine_impact.gap"]["prior"] == 0.4
+    # discovery ran on the motion: every other candidate tried is listed with its verdict
     tried = {t["effect"] for r in doc["discovery_rounds"] for t in r}
     assert tried == {"front_wheel_block", "stiffness_zone", "progressive_stiffness", "rate_dependence", "rear_axle_lift"}
     assert all(t["accepted"] or t["reason"] for r in doc["discovery_rounds"] for t in r)
-    # ... and found the Camry's structure softer past the first centimetres of crush
-    assert [d["effect"] for d in doc["discoveries"]] == ["stiffness_zone"]
-    zone = doc["discoveries"][0]
-    assert zone["parameters"]["k_zone"]["value"] < doc["parameters"]["k_compression"]["value"]
-    assert "softer" in zone["explanation"] and zone["rms_after_m"] < 0.7 * zone["rms_before_m"]
-    # the force check scores the base model too, and a rigid car moving exactly as measured:
-    # the better motion fit moves the force towards the rigid car's (ISO 0.730 -> 0.702, rigid 0.685)
+    for d in doc["discoveries"]:
+        assert d["rms_after_m"] < d["rms_before_m"]
+    # the load cells (never fitted) see the engine block hit the barrier at 35 ms: a one-body
+    # model's force (mass x the cabin's deceleration) cannot peak there; the two-body model's
+    # does, with the peak's height within issue 15's 8 %, and its curve is closer to the load
+    # cells' (ISO 18571) than the one-body model's and than a rigid car moving as measured
     base, rigid = check["base_model"], check["rigid_body"]
-    assert rigid["iso18571"]["overall"] < check["iso18571"]["overall"] < base["iso18571"]["overall"]
-    assert abs(check["impulse_error"]) < abs(base["impulse_error"])
+    assert base["label"] == "one-body base model"
+    assert abs(check["peak_time_predicted_ms"] - check["peak_time_measured_ms"]) <= 5.0
+    assert abs(base["peak_time_predicted_ms"] - check["peak_time_measured_ms"]) > 5.0
+    assert abs(check["peak_error"]) < 0.08
+    assert check["iso18571"]["overall"] > max(base["iso18571"]["overall"], rigid["iso18571"]["overall"])
+    assert check["nrmse"] < base["nrmse"]
     report = (out / "report.md").read_text()
-    assert "base model, before discovery" in report and "a rigid car moving exactly as measured" in report
+    assert "one-body base model" in report and "a rigid car moving exactly as measured" in report
+    assert "two bodies" in report
     assert " of 5 starting points reached the best fit of the base model" in report

@@ -34,11 +34,12 @@ def test_layout_written(iso):
     root = iso.parent
     assert iso.name == "10146.mme"
     assert sorted(p.name for p in (root / "Channel").iterdir()) == [
-        "10146.001", "10146.002", "10146.003", "10146.004", "10146.005", "10146.chn"]
+        "10146.001", "10146.002", "10146.003", "10146.004", "10146.005", "10146.006", "10146.chn"]
     info, _ = parse_info((root / "Channel" / "10146.chn").read_text().splitlines(), root)
-    assert info["number of channels"] == "5"
+    assert info["number of channels"] == "6"
     assert info["name of channel 001"].startswith("10SECMLERE00ACXP / LEFT REAR SEAT")
     assert info["name of channel 005"].startswith("B0LOMA000000FOXP")
+    assert info["name of channel 006"].startswith("10ENGNTO0000ACXP / TOP OF ENGINE X")  # after the barrier
 
 
 def test_round_trip_matches_the_nhtsa_reading(nhtsa, iso):

@@ -50,10 +50,13 @@ def test_header_fields():
     assert h.speed_kmh == pytest.approx(57.09)
     assert h.mass_kg == pytest.approx(1719.0)
     by_curve = {c.curve: c for c in h.channels}
-    assert sorted(by_curve) == [93, 94, 96, 99, 100, 900]
+    assert sorted(by_curve) == [93, 94, 95, 96, 99, 100, 900]
     assert by_curve[93].attachment == "FLLR" and by_curve[93].units == "G'S"
     assert by_curve[93].dt == pytest.approx(1e-4) and by_curve[93].n_samples == 3500
     assert not by_curve[96].valid and by_curve[96].n_samples == 1170
+    assert by_curve[95].attachment == "ENGN" and by_curve[95].valid_until_s == float("inf")
+    # "CF" (channel failed) with "No valid data after 67ms": usable up to 67 ms
+    assert by_curve[96].valid_until_s == pytest.approx(0.067)
     assert not by_curve[99].primary and by_curve[93].primary
 
 
@@ -92,7 +95,7 @@ def test_rebound_of_10146(motion):
 def test_measurement_shape_and_sigma(motion, test10146):
     assert motion.t[0] == 0.0 and motion.fps == pytest.approx(1000.0)
     assert motion.t[-1] == pytest.approx(0.2999, abs=2e-3)
-    assert set(motion.channels) == {"x_m", "vx_mps"}
+    assert set(motion.channels) == {"x_m", "vx_mps", "engine_x_m", "engine_vx_mps"}  # 095: the engine
     assert motion.channels["vx_mps"][0] == pytest.approx(test10146.impact_speed_mps)
     assert motion.channels["x_m"][0] == 0.0
     sx, sv = motion.sigma["x_m"], motion.sigma["vx_mps"]
@@ -225,4 +228,4 @@ def test_vehicle_selection_prefers_cg(tmp_path):
 def test_progress_is_reported_per_channel_file():
     calls = []
     read_nhtsa(HEADER, progress=lambda done, total, stage: calls.append((done, total)))
-    assert calls == [(k, 5) for k in range(1, 6)]
+    assert calls == [(k, 7) for k in range(1, 8)]  # 4 crossmember, 2 engine, 1 barrier

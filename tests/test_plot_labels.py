@@ -72,3 +72,24 @@ def test_the_residual_plots_grey_band_is_named(fake_fit, tmp_path, figures):
     fig = figures[-1]
     assert "measurement +-2 sigma" in legend_texts(fig.axes[0])
     assert "grey band" in fig.axes[-1].get_xlabel()
+
+
+def test_force_crush_shows_each_body_of_a_two_body_model(tmp_path, figures):
+    """Force vs crush of a two-body model: the whole barrier force, the structure's against
+    the cabin's crush and the engine block's against its own crush, each named, with axis
+    units; a one-body model draws only the whole force."""
+    from identify.force_check import plot_force_crush
+
+    d = np.linspace(0.0, 0.6, 50)
+    f_e = np.where(d > 0.3, 2e6 * (d - 0.3), 0.0)
+    f_s = 8e5 * d
+    plot_force_crush(tmp_path / "two.png", d, f_s + f_e, d, f_s + f_e, engine=(np.maximum(d - 0.3, 0.0), f_e, f_s))
+    ax = figures[-1].axes[0]
+    labels = legend_texts(ax)
+    assert len(labels) == 4 and len(set(labels)) == 4
+    assert any("engine" in t for t in labels) and any("structure" in t for t in labels)
+    assert ax.get_xlabel() == "crush (m)" and "(kN)" in ax.get_ylabel()
+    engine_line = next(line for line in ax.get_lines() if "engine" in line.get_label())
+    assert np.all(np.asarray(engine_line.get_xdata()) > 0)  # drawn only where the engine touches
+    plot_force_crush(tmp_path / "one.png", d, f_s, d, f_s)
+    assert len(legend_texts(figures[-1].axes[0])) == 2

@@ -3,7 +3,7 @@
     python data/nhtsa-10146/trim.py /path/to/nhtsa-10146     # the folder holding v10146.EV5
 
 Writes (see README.md): the header trimmed to the channels kept plus one row (curve 900)
-for the summed barrier force, the vehicle accelerometer files 093, 094, 096, 099, 100
+for the summed barrier force, the vehicle accelerometer files 093, 094, 095, 096, 099, 100
 verbatim, ``v10146.900`` (sum of every valid barrier Fx load cell), and ``cells/`` (a
 header with five raw Fx cells and the two invalid ones, and the five cells' files).
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-VEHICLE_CURVES = (93, 94, 96, 99, 100)
+VEHICLE_CURVES = (93, 94, 95, 96, 99, 100)
 RAW_CELLS = (131, 260, 263, 275, 287)
 SUM_CURVE = 900
 

@@ -5,11 +5,13 @@
     measurement = measurement_from_test(test)               # x_m, vx_mps from t = 0 at contact
 
 Readers (``read_nhtsa`` for NHTSA's EV5 ASCII export, ``read_isomme`` for ISO-MME /
-ISO/TS 13499) return a :class:`SensorTest`: the vehicle's X accelerations and the barrier's
-X load cells in SI units (acceleration forward positive, barrier force compressive
-positive), invalid channels skipped. ``measurement_from_test`` filters (SAE J211 CFC 180),
-finds first contact and integrates to the :class:`identify.measurement.Measurement` that
-the fit reads. ``read_recording`` / ``is_recording`` pick the reader by file type.
+ISO/TS 13499) return a :class:`SensorTest`: the vehicle's X accelerations, the engine's X
+accelerations (``engine``, when the engine was instrumented) and the barrier's X load cells
+in SI units (acceleration forward positive, barrier force compressive positive), invalid
+channels skipped with a note. ``measurement_from_test`` filters (SAE J211 CFC 180), finds
+first contact and integrates to the :class:`identify.measurement.Measurement` that the fit
+reads: ``x_m``, ``vx_mps`` and, from the engine's accelerometers, ``engine_x_m``,
+``engine_vx_mps``. ``read_recording`` / ``is_recording`` pick the reader by file type.
 
 The barrier force is deliberately not in the Measurement: it is the independent check of
 ``identify.force_check`` (``force_check_document(test, measurement, fitted_trajectory,

@@ -23,7 +23,14 @@ motion: test object ``1``, ``AC``, direction ``X``, at the CG (``VEHC`` with fin
 ``CRME`` or ``SEAT`` with a fine location ``RE``). Barrier forces: test object ``B`` (fixed
 barrier), ``FO``, direction ``X`` (a load-cell matrix is main location ``LOMA``). A rigid
 barrier can only be pushed: the summed force is oriented so that its largest excursion is
-positive (compressive), and the notes say when that flipped the file's sign.
+positive (compressive), and the notes say when that flipped the file's sign. Engine motion
+(the second measured body): test object ``1``, main location ``ENGN``, ``AC``, direction
+``X`` (``10ENGNTO0000ACX0``, ``10ENGNBO0000ACX0``: top and bottom of the engine), forward
+positive like the vehicle's. An engine channel that cannot be used (status not ok, a unit
+that is not an acceleration, a file that disagrees with its header, another sample rate
+than the vehicle's) is skipped with a note, never an error; trailing ``NOVALUE`` samples of
+an engine channel (a sensor that failed during the crash) end it early
+(``identify.recordings.motion.usable_engine_channels`` says what happens then).
 """
 
 from __future__ import annotations
@@ -38,10 +45,10 @@ import numpy as np
 
 from identify.errors import UserError
 from sim._text import read_text
-from identify.recordings.motion import G0, Channel, SensorTest
+from identify.recordings.motion import G0, Channel, SensorTest, usable_engine_channels
 
 __all__ = ["read_isomme", "write_isomme", "parse_info", "find_mme", "is_vehicle_motion",
-           "is_barrier_force"]
+           "is_engine_motion", "is_barrier_force"]
 
 UNITS = {"g": ("acceleration", G0), "m/s**2": ("acceleration", 1.0), "m/(s*s)": ("acceleration", 1.0),
          "m/s^2": ("acceleration", 1.0), "m/s2": ("acceleration", 1.0),
@@ -132,13 +139,22 @@ def is_vehicle_motion(code: str) -> str | None:
     return None
 
 
+def is_engine_motion(code: str) -> bool:
+    """Is ``code`` an X acceleration of the engine (test object 1, main location ENGN)."""
+    c = code.upper()
+    return len(c) == 16 and c[0] == "1" and c[2:6] == "ENGN" and c[12:14] == "AC" and c[14] == "X"
+
+
 def is_barrier_force(code: str) -> bool:
     """Is ``code`` an X force of the fixed barrier."""
     c = code.upper()
     return len(c) == 16 and c[0] == "B" and c[12:14] == "FO" and c[14] == "X"
 
 
-def _read_channel(path: Path, code: str, label: str) -> tuple[dict[str, str], np.ndarray, np.ndarray]:
+def _read_channel(path: Path, code: str, label: str,
+                  trailing_novalue: bool = False) -> tuple[dict[str, str], np.ndarray, np.ndarray]:
+    """Header, times (s) and values of one channel file; ``trailing_novalue``: samples
+    without a value at the end are dropped (the channel ends early) instead of refused."""
     lines = read_text(path, "ISO-MME channel file", encoding="latin-1", error=UserError).splitlines()
     info, end = parse_info(lines, path)
     try:
@@ -149,6 +165,8 @@ def _read_channel(path: Path, code: str, label: str) -> tuple[dict[str, str], np
     n = _number(info, "Number of samples", path)
     if n is not None and int(n) != len(values):
         raise UserError(f"{path}: has {len(values)} samples, its header announces {int(n)}")
+    if trailing_novalue and np.any(np.isfinite(values)):
+        values = values[:int(np.flatnonzero(np.isfinite(values))[-1]) + 1]
     dt = _number(info, "Sampling interval", path)
     if dt is None or dt <= 0:
         raise UserError(f"{path}: no positive 'Sampling interval' for {label}")
@@ -209,6 +227,7 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
     motion = [(e, kind) for e, kind in motion if kind]
     if any(kind == "cg" for _, kind in motion):
         motion = [(e, kind) for e, kind in motion if kind == "cg"]
+    engine = [e for e in entries if is_engine_motion(e[1])]
     cells = [e for e in entries if barrier and is_barrier_force(e[1])]
     if not motion:
         raise UserError(
@@ -217,16 +236,16 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
 
     notes: list[str] = []
 
-    def load(entry, quantity_wanted) -> Channel | None:
+    def load(entry, quantity_wanted, trailing_novalue=False) -> Channel | None:
         num, code, text = entry
         f = _find_ci(chdir, f"{mme.stem}.{num}")
         label = f"channel {num} {code} ({text})"
         if f is None:
             raise UserError(f"missing channel file Channel/{mme.stem}.{num} for {label}")
-        cinfo, t, y = _read_channel(f, code, label)
+        cinfo, t, y = _read_channel(f, code, label, trailing_novalue)
         status = _value(cinfo, "Data status")
         if status is not None and not status.lower().startswith("ok"):
-            notes.append(f"skipped {label}: data status {status!r}")
+            notes.append(f"skipped {'engine ' if trailing_novalue else ''}{label}: data status {status!r}")
             return None
         unit = (_value(cinfo, "Unit") or "").strip()
         if unit.lower() not in UNITS or UNITS[unit.lower()][0] != quantity_wanted:
@@ -235,16 +254,29 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
         return Channel(code=code, name=_value(cinfo, "Name of the channel") or text, t=t,
                        values=y * UNITS[unit.lower()][1], quantity=quantity_wanted)
 
-    todo = [(e, "acceleration") for e, _ in motion] + [(e, "force") for e in cells]
-    loaded = []
-    for k, (e, quantity) in enumerate(todo):
-        loaded.append(load(e, quantity))
+    def load_engine(entry) -> Channel | None:
+        try:
+            return load(entry, "acceleration", trailing_novalue=True)
+        except UserError as err:  # an engine channel is never worth an error
+            notes.append(f"skipped engine channel {entry[0]} {entry[1]} ({entry[2]}): {err}")
+            return None
+
+    todo = ([(e, "vehicle") for e, _ in motion] + [(e, "engine") for e in engine]
+            + [(e, "barrier") for e in cells])
+    loaded: dict[str, list] = {"vehicle": [], "engine": [], "barrier": []}
+    for k, (e, kind) in enumerate(todo):
+        loaded[kind].append(load_engine(e) if kind == "engine" else
+                            load(e, "force" if kind == "barrier" else "acceleration"))
         if progress is not None:
             progress(k + 1, len(todo), "reading channels")
-    vehicle = tuple(c for c in loaded[:len(motion)] if c is not None)
+    vehicle = tuple(c for c in loaded["vehicle"] if c is not None)
     if not vehicle:
         raise UserError(f"{chn}: every vehicle-motion channel is marked invalid")
-    forces = tuple(c for c in loaded[len(motion):] if c is not None)
+    numbers = {e[1]: e[0] for e in engine}
+    kept, skipped = usable_engine_channels(vehicle[0].t, [c for c in loaded["engine"] if c is not None],
+                                           label=lambda c: f"channel {numbers.get(c.code, '?')} {c.code} ({c.name})")
+    notes += skipped
+    forces = tuple(c for c in loaded["barrier"] if c is not None)
     if forces:
         total = np.sum([c.values for c in forces], axis=0) if len({len(c.values) for c in forces}) == 1 else None
         if total is not None and abs(total.min()) > abs(total.max()):
@@ -252,7 +284,8 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
             notes.append("barrier forces: the file counts compression negative; turned positive")
         notes.append(f"barrier force: sum of {len(forces)} X force channel(s)")
     return SensorTest(source=str(mme), impact_speed_mps=speed, mass_kg=mass, vehicle=vehicle,
-                      barrier=forces, title=_value(info, "Title") or number, notes=tuple(notes))
+                      barrier=forces, title=_value(info, "Title") or number, notes=tuple(notes),
+                      engine=kept)
 
 
 def _side(name: str) -> str:
@@ -260,12 +293,18 @@ def _side(name: str) -> str:
     return "LE" if "LEFT" in n else "RI" if "RIGHT" in n else "00"
 
 
+def _position(name: str) -> str:
+    n = name.upper()
+    return "TO" if "TOP" in n else "BO" if "BOTTOM" in n else "00"
+
+
 def write_isomme(test: SensorTest, folder: str | Path, number: str = "TEST") -> Path:
-    """Write ``test`` as an ISO-MME folder (vehicle accelerations in g, barrier forces in
-    N, compressive positive), atomically: a half-written folder never appears.
+    """Write ``test`` as an ISO-MME folder (vehicle and engine accelerations in g, barrier
+    forces in N, compressive positive), atomically: a half-written folder never appears.
 
     Vehicle channels are coded ``10SECM<side>RE<nn>ACXP`` (side LE/RI from the channel's
-    name), barrier channels ``B0LOMA<nnnn>00FOXP``.
+    name), barrier channels ``B0LOMA<nnnn>00FOXP``, engine channels ``10ENGN<pos>00<nn>ACXP``
+    (pos TO/BO for a name with TOP/BOTTOM, else 00), numbered after the barrier's.
 
     Parameters
     ----------
@@ -303,6 +342,8 @@ def write_isomme(test: SensorTest, folder: str | Path, number: str = "TEST") -> 
             rows.append((f"10SECM{_side(ch.name)}RE{i:02d}ACXP", ch, "g", 1.0 / G0))
         for j, ch in enumerate(test.barrier):
             rows.append((f"B0LOMA{j:04d}00FOXP", ch, "N", 1.0))
+        for i, ch in enumerate(test.engine):
+            rows.append((f"10ENGN{_position(ch.name)}00{i:02d}ACXP", ch, "g", 1.0 / G0))
         chn = [f"{'Instrumentation standard':<28}:ISO 6487", f"{'Number of channels':<28}:{len(rows)}"]
         for k, (code, ch, unit, scale) in enumerate(rows, start=1):
             chn.append(f"{'Name of channel ' + format(k, '03d'):<28}:{code} / {ch.name}")

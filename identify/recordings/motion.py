@@ -12,7 +12,13 @@ negative; barrier force compressive positive). This module then
 4. filters the averaged vehicle acceleration with SAE J211 CFC 180 (``video.filters``),
    integrates it to velocity (from the header's impact speed) and displacement (0 at
    contact), and puts a sigma on every sample (:func:`motion_sigma`);
-5. returns an :class:`identify.measurement.Measurement` with ``x_m`` and ``vx_mps``.
+5. does the same for the engine's X accelerometers when the test has them (a second
+   measured body: the engine hits the barrier and is stopped long before the cabin);
+6. returns an :class:`identify.measurement.Measurement` with ``x_m`` and ``vx_mps``, and
+   ``engine_x_m`` and ``engine_vx_mps`` (NaN where the engine was not measured).
+
+Engine channels that cannot be used are skipped with a note, never with an error
+(:func:`usable_engine_channels`): the cabin alone still makes a Measurement.
 
 The summed barrier force is deliberately *not* a channel of the Measurement: it is the
 independent check of ``identify.force_check``, which the fit must not see.
@@ -33,7 +39,7 @@ NOISE_END_S = -0.005  # s, pre-impact samples used for offset and noise end here
 __all__ = [
     "G0", "Channel", "SensorTest", "MotionOptions", "common_time_base", "combine",
     "find_onset", "contact_time", "filter_cfc", "integrate", "motion_sigma", "channel_motions",
-    "measurement_from_test", "crash_facts",
+    "usable_engine_channels", "measurement_from_test", "crash_facts",
 ]
 
 
@@ -90,6 +96,11 @@ class SensorTest:
         The test's title.
     notes : tuple of str
         What the reader skipped or assumed.
+    engine : tuple of Channel
+        Engine X accelerations to average (m/s^2, forward positive, like ``vehicle``), valid
+        ones only, on the vehicle channels' clock; a channel may end before them (its
+        sensor failed), the Measurement then has no engine motion after its end. Empty
+        when the engine was not instrumented.
     """
 
     source: str
@@ -99,6 +110,7 @@ class SensorTest:
     barrier: tuple[Channel, ...] = ()
     title: str = ""
     notes: tuple[str, ...] = ()
+    engine: tuple[Channel, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -399,15 +411,89 @@ def channel_motions(test: SensorTest, t0: float, options: MotionOptions = Motion
         Channel code -> (velocity (m,) m/s, displacement (m,) m), in ``test.vehicle``'s order.
     """
     t = common_time_base(test.vehicle, "vehicle accelerations")
+    stack = np.stack([np.asarray(c.values, dtype=float) for c in test.vehicle])
+    tau, each = _each_motion(stack, t, t0, test.impact_speed_mps, options, test.source)
+    return tau, {c.code: m for c, m in zip(test.vehicle, each)}
+
+
+def _each_motion(stack: np.ndarray, t: np.ndarray, t0: float, v0: float, options: MotionOptions, source: str):
+    """Velocity (m/s) and displacement (m) of each row of ``stack`` (accelerations, m/s^2,
+    on times ``t``, s; NaN after a channel's end), each offset-free, CFC-filtered and
+    integrated from ``v0`` at ``t0``. Returns (tau, [(v, x), ...])."""
     fs = float(1.0 / np.median(np.diff(t)))
-    pre = _noise_window(t, test.source)
-    out, tau = {}, None
-    for ch in test.vehicle:
-        one = np.asarray(ch.values, dtype=float)
+    pre = _noise_window(t, source)
+    out, tau = [], None
+    for one in stack:
         one = filter_cfc(one - one[pre].mean(), fs, options.cfc)
-        tau, vi, xi = integrate(t, one, t0, test.impact_speed_mps)
-        out[ch.code] = (vi, xi)
+        tau, vi, xi = integrate(t, one, t0, v0)
+        out.append((vi, xi))
     return tau, out
+
+
+def usable_engine_channels(reference_t: np.ndarray, channels, label=None) -> tuple[tuple[Channel, ...], list[str]]:
+    """The engine X accelerometers that can be averaged on the vehicle channels' clock, and
+    a note on each one that cannot (skipped, never an error: the cabin alone still makes a
+    Measurement).
+
+    Rules, in order: a channel must be an acceleration with at least two samples, all
+    finite; sampled at the vehicle channels' rate (relative 1e-4); its first sample at
+    theirs (within a quarter interval). A channel that ends before the vehicle channels
+    (by more than half an interval; a sensor that failed during the crash) is skipped when
+    another engine channel reaches further: only the channels reaching furthest are kept,
+    as a mean whose members drop out one by one would jump where each ends. When none
+    covers the vehicle channels' span, the furthest-reaching ones are kept and the engine
+    is not measured after their end (``measurement_from_test`` marks it NaN and says so).
+
+    Parameters
+    ----------
+    reference_t : (n,) float
+        The vehicle channels' sample times, s.
+    channels : sequence of Channel
+        Engine X accelerations, m/s^2.
+    label : callable, optional
+        ``label(channel)`` for the notes; default ``channel <code> (<name>)``.
+
+    Returns
+    -------
+    kept : tuple of Channel
+        In ``channels``' order.
+    notes : list of str
+        One per skipped channel.
+    """
+    label = label or (lambda ch: f"channel {ch.code} ({ch.name})")
+    ref = np.asarray(reference_t, dtype=float)
+    dt = float(np.median(np.diff(ref)))
+    notes: list[str] = []
+    fit = []
+    for ch in channels:
+        t = np.asarray(ch.t, dtype=float)
+        why = None
+        if ch.quantity != "acceleration":
+            why = f"it is a {ch.quantity}, not an acceleration"
+        elif len(t) < 2 or len(t) != len(np.asarray(ch.values)) or not np.all(np.isfinite(ch.values)):
+            why = "it needs at least two samples, all with a value"
+        elif not np.isclose(ch.fs, 1.0 / dt, rtol=1e-4):
+            why = f"it is sampled at {ch.fs:g} Hz, the vehicle channels at {1.0 / dt:g} Hz"
+        elif abs(t[0] - ref[0]) > 0.25 * dt:
+            why = (f"it starts at {t[0] * 1e3:g} ms, the vehicle channels at {ref[0] * 1e3:g} ms "
+                   f"(recording time): not one clock")
+        if why:
+            notes.append(f"skipped engine {label(ch)}: {why}")
+        else:
+            fit.append(ch)
+    if not fit:
+        return (), notes
+    furthest = min(max(float(c.t[-1]) for c in fit), float(ref[-1]))
+    reaches = [bool(c.t[-1] >= furthest - 0.5 * dt) for c in fit]
+    kept = tuple(c for c, r in zip(fit, reaches) if r)
+    names = ", ".join(label(c) for c in kept)
+    for ch, r in zip(fit, reaches):
+        if not r:
+            reach = ("covers the whole recording" if furthest >= ref[-1] - 0.5 * dt
+                     else f"reaches {furthest * 1e3:.1f} ms")
+            notes.append(f"skipped engine {label(ch)}: its data end at {ch.t[-1] * 1e3:.1f} ms (recording "
+                         f"time), before the vehicle channels' {ref[-1] * 1e3:.1f} ms, and {names} {reach}")
+    return kept, notes
 
 
 def _vehicle_motion(test: SensorTest, t0: float, options: MotionOptions):
@@ -423,14 +509,68 @@ def _vehicle_motion(test: SensorTest, t0: float, options: MotionOptions):
     spread_v = spread_x = None
     if len(test.vehicle) > 1:
         _, each = channel_motions(test, t0, options)
-        vs = [vi for vi, _ in each.values()]
-        xs = [xi for _, xi in each.values()]
-        n = len(test.vehicle)
-        spread_v = np.std(vs, axis=0, ddof=1) / np.sqrt(n)
-        spread_x = np.std(xs, axis=0, ddof=1) / np.sqrt(n)
+        spread_v, spread_x = _spread(list(each.values()))
     sv, sx = motion_sigma(tau, v, x, test.impact_speed_mps, noise, fs, options.cfc,
                           int(np.count_nonzero(pre)), options, spread_v, spread_x)
     return tau, v, x, sv, sx, fs, noise
+
+
+def _spread(each):
+    """Standard error of the mean of several channels' (velocity, displacement)."""
+    n = len(each)
+    return (np.std([vi for vi, _ in each], axis=0, ddof=1) / np.sqrt(n),
+            np.std([xi for _, xi in each], axis=0, ddof=1) / np.sqrt(n))
+
+
+def _engine_motion(test: SensorTest, t0: float, options: MotionOptions):
+    """Filtered, integrated engine motion on the vehicle channels' clock, processed as the
+    cabin's is (see measurement_from_test); NaN after the engine channels end.
+
+    Returns
+    -------
+    motion : tuple or None
+        (kept channels, tau (s), v (m/s), x (m), sigma_v (m/s), sigma_x (m), noise (m/s^2),
+        end of the engine data (s, recording time) or None when it covers the cabin's);
+        None when no engine channel can be used.
+    notes : list of str
+        Channels skipped, and why.
+    """
+    t = common_time_base(test.vehicle, "vehicle accelerations")
+    kept, notes = usable_engine_channels(t, test.engine)
+    early = [c for c in kept if c.t[-1] <= max(t0, NOISE_END_S)]
+    if early:
+        notes += [f"skipped engine channel {c.code} ({c.name}): its data end at {c.t[-1] * 1e3:.1f} ms "
+                  f"(recording time), before first contact" for c in early]
+        return None, notes
+    if not kept:
+        return None, notes
+    stack = np.full((len(kept), len(t)), np.nan)
+    for k, ch in enumerate(kept):
+        n = min(len(ch.t), len(t))
+        stack[k, :n] = np.asarray(ch.values, dtype=float)[:n]
+    fs = float(1.0 / np.median(np.diff(t)))
+    pre = _noise_window(t, test.source)
+    a = (stack - stack[:, pre].mean(axis=1, keepdims=True)).mean(axis=0)
+    af = filter_cfc(a, fs, options.cfc)
+    noise = float(np.std(af[pre]))
+    tau, v, x = integrate(t, af, t0, test.impact_speed_mps)
+    spread_v = spread_x = None
+    if len(kept) > 1:
+        _, each = _each_motion(stack, t, t0, test.impact_speed_mps, options, test.source)
+        spread_v, spread_x = _spread(each)
+    sv, sx = motion_sigma(tau, v, x, test.impact_speed_mps, noise, fs, options.cfc,
+                          int(np.count_nonzero(pre)), options, spread_v, spread_x)
+    end = float(kept[0].t[-1]) if np.isnan(a[-1]) else None
+    return (kept, tau, v, x, sv, sx, noise, end), notes
+
+
+def _resampled(t_out: np.ndarray, tau: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``y`` (on ``tau``, s) at ``t_out`` (s), NaN after its last finite sample."""
+    ok = np.isfinite(y)
+    if not np.any(ok):
+        return np.full(len(t_out), np.nan)
+    out = np.interp(t_out, tau[ok], y[ok])
+    return np.where(t_out <= tau[ok][-1] + 1e-9, out, np.nan)
 
 
 def measurement_from_test(test: SensorTest, options: MotionOptions = MotionOptions()) -> Measurement:
@@ -449,6 +589,12 @@ def measurement_from_test(test: SensorTest, options: MotionOptions = MotionOptio
         since contact, towards the barrier) and ``vx_mps``, each with a sigma;
         ``impact_speed_mps`` from the header; ``events_ms`` with ``compression_end``
         (maximum displacement) and, when the barrier was instrumented, ``separation``.
+        When ``test.engine`` has a usable channel, also ``engine_x_m`` (the engine's
+        displacement since the same contact time, m) and ``engine_vx_mps`` (m/s): the mean
+        of the engine accelerometers processed exactly as the cabin's (pre-impact offset
+        removed, CFC ``options.cfc``, integrated from the header's impact speed at the
+        cabin's t0, sigma by :func:`motion_sigma`), NaN (value and sigma) after the engine
+        channels end. Engine channels that cannot be used are skipped with a note.
 
     Examples
     --------
@@ -477,16 +623,40 @@ def measurement_from_test(test: SensorTest, options: MotionOptions = MotionOptio
         f"CFC {options.cfc}, pre-impact noise {noise / G0:.3f} g, integrated from "
         f"{test.impact_speed_mps:.3f} m/s",
     )
+    e_channels, e_sigma, e_notes = _engine_measurement(test, t0, t_out, options)
     return Measurement(
         t=t_out,
-        channels={"x_m": res(x), "vx_mps": res(v)},
-        sigma={"x_m": res(sx), "vx_mps": res(sv)},
+        channels={"x_m": res(x), "vx_mps": res(v), **e_channels},
+        sigma={"x_m": res(sx), "vx_mps": res(sv), **e_sigma},
         impact_speed_mps=float(test.impact_speed_mps),
         impact_speed_sigma=float(options.speed_sigma_mps),
         source=test.source,
         events_ms=events,
-        notes=notes,
+        notes=notes + e_notes,
     )
+
+
+def _engine_measurement(test: SensorTest, t0: float, t_out: np.ndarray, options: MotionOptions):
+    """The Measurement's engine channels on ``t_out`` (s since contact): ``engine_x_m`` (m)
+    and ``engine_vx_mps`` (m/s), their sigmas and the notes; empty without a usable engine
+    channel (then the notes say why, if there were any)."""
+    if not test.engine:
+        return {}, {}, ()
+    engine, notes = _engine_motion(test, t0, options)
+    if engine is None:
+        return {}, {}, tuple(notes)
+    kept, tau, v, x, sv, sx, noise, end = engine
+    channels = {"engine_x_m": _resampled(t_out, tau, x), "engine_vx_mps": _resampled(t_out, tau, v)}
+    sigma = {"engine_x_m": _resampled(t_out, tau, sx), "engine_vx_mps": _resampled(t_out, tau, sv)}
+    codes = ", ".join(c.code for c in kept)
+    notes.append(f"engine motion from the mean of {len(kept)} engine X accelerometer(s) ({codes}), CFC "
+                 f"{options.cfc}, pre-impact noise {noise / G0:.3f} g, integrated from "
+                 f"{test.impact_speed_mps:.3f} m/s at the cabin's contact time")
+    if end is not None:
+        notes.append(f"the engine is not measured from {(end - t0) * 1e3:.1f} ms after contact on: its "
+                     f"accelerometer(s) ({codes}) end at {end * 1e3:.1f} ms recording time; engine_x_m "
+                     f"and engine_vx_mps are NaN from there")
+    return channels, sigma, tuple(notes)
 
 
 def _separation_time(test: SensorTest, t0: float) -> float | None:

@@ -22,7 +22,22 @@ The header is a set of sections, each opened by a line ``----- NAME -----`` (``E
 
 Sign conventions of the export: vehicle X accelerations are positive forward (the crash
 pulse is negative), which is this package's x; barrier load cells read compression as
-negative Fx, which the reader turns into a positive force.
+negative Fx, which the reader turns into a positive force. Engine X accelerometers
+(attachment ENGN) use the vehicle's convention.
+
+Data status. ``AM`` (as measured) is the only status whose data are used whole
+(``VALID_STATUS``). ``CF`` is NHTSA's "channel failed": the lab found the sensor's data
+wrong from some time on, and says from when in the row's description. ``"No valid data"``
+alone means none is usable (the barrier's curves 347 and 500 of test 10146 have no file at
+all); ``"No valid data after 67ms"`` means the samples before 67 ms are good and the lab cut
+the file there (curve 96 of 10146: the header's last sample is 669, i.e. 66.9 ms, and the
+file holds exactly those 1170 samples). Vehicle-motion channels must be ``AM``: they are
+averaged over the whole recording, and a crossmember channel that stops at 67 ms could not
+be. An engine channel marked ``CF`` with "No valid data after N ms" is used up to N ms
+(``Ev5Channel.valid_until_s``; samples after N ms are dropped if the file has any), like a
+channel that simply ends early: ``identify.recordings.motion.usable_engine_channels`` then
+skips it when another engine channel covers the recording, and otherwise the engine's
+motion is measured until N ms only.
 """
 
 from __future__ import annotations
@@ -35,11 +50,11 @@ import numpy as np
 
 from identify.errors import UserError
 from sim._text import read_text
-from identify.recordings.motion import G0, Channel, SensorTest
+from identify.recordings.motion import G0, Channel, SensorTest, usable_engine_channels
 
 __all__ = ["Ev5Channel", "Ev5Header", "read_ev5_header", "load_ev5_channel",
-           "vehicle_motion_channels", "barrier_force_channels", "read_nhtsa",
-           "MOTION_ATTACHMENTS", "VALID_STATUS"]
+           "vehicle_motion_channels", "engine_channels", "barrier_force_channels", "read_nhtsa",
+           "MOTION_ATTACHMENTS", "ENGINE_ATTACHMENTS", "VALID_STATUS"]
 
 # Sensor attachments whose X acceleration is the motion of the rigid passenger cell.
 MOTION_ATTACHMENTS = {
@@ -48,7 +63,10 @@ MOTION_ATTACHMENTS = {
     "VECG": "vehicle CG",
     "CGCG": "vehicle CG",
 }
+# Sensor attachments whose X acceleration is the engine's (the second measured body).
+ENGINE_ATTACHMENTS = {"ENGN": "engine"}
 VALID_STATUS = ("AM",)
+FAILED_AFTER = re.compile(r"no valid data after\s*([0-9]+(?:\.[0-9]*)?)\s*ms", re.IGNORECASE)
 UNIT_SCALE = {"G'S": ("acceleration", G0), "MPS2": ("acceleration", 1.0),
               "NWT": ("force", 1.0), "KN": ("force", 1e3)}
 
@@ -98,6 +116,18 @@ class Ev5Channel:
     def valid(self) -> bool:
         """True when the header marks the data as usable."""
         return self.status in VALID_STATUS
+
+    @property
+    def valid_until_s(self) -> float | None:
+        """Until when the data are usable, s on the recording's clock: ``inf`` for a valid
+        status; N ms for a ``CF`` row whose description says "No valid data after N ms";
+        None (nothing usable) otherwise. See the module's notes on data status."""
+        if self.valid:
+            return float("inf")
+        m = FAILED_AFTER.search(self.description)
+        if self.status == "CF" and m:
+            return float(m.group(1)) * 1e-3
+        return None
 
     @property
     def n_samples(self) -> int:
@@ -298,6 +328,40 @@ def vehicle_motion_channels(header: Ev5Header) -> tuple[list[Ev5Channel], list[s
     return (cg or chosen), notes
 
 
+def engine_channels(header: Ev5Header) -> tuple[list[Ev5Channel], list[str]]:
+    """The engine's X accelerometers (vehicle 1, sensor type AC, attachment ENGN, axis X)
+    whose data are usable at least in part (``Ev5Channel.valid_until_s``), and notes on the
+    ones skipped (invalid status, units that are not an acceleration). Empty when the
+    engine was not instrumented."""
+    chosen, notes = [], []
+    for ch in header.channels:
+        if not (ch.vehicle == 1 and ch.sensor_type == "AC" and ch.axis.startswith("X")
+                and ch.attachment in ENGINE_ATTACHMENTS):
+            continue
+        if ch.valid_until_s is None:
+            notes.append(f"skipped engine {ch.label()}: header marks its data {ch.status!r}")
+        elif UNIT_SCALE.get(ch.units, ("",))[0] != "acceleration":
+            notes.append(f"skipped engine {ch.label()}: its units {ch.units!r} are not an acceleration")
+        else:
+            chosen.append(ch)
+    return chosen, notes
+
+
+def _engine_channel(header: Ev5Header, ch: Ev5Channel, notes: list[str]) -> Channel | None:
+    """Channel ``ch`` cut at its ``valid_until_s``, or None and a note when its file is
+    missing or disagrees with the header (an engine channel is never worth an error)."""
+    try:
+        c = _to_channel(header, ch, 1.0)
+    except UserError as err:
+        notes.append(f"skipped engine {ch.label()}: {err}")
+        return None
+    keep = c.t <= ch.valid_until_s + 0.25 * ch.dt
+    if np.count_nonzero(keep) < 2:
+        notes.append(f"skipped engine {ch.label()}: no valid data (header status {ch.status!r})")
+        return None
+    return Channel(c.code, c.name, c.t[keep], c.values[keep], c.quantity, c.redundant)
+
+
 def barrier_force_channels(header: Ev5Header) -> tuple[list[Ev5Channel], list[str]]:
     """The valid X-force load cells of the barrier (vehicle 0, LC, axis X, force units)
     and notes on the ones skipped as invalid. Empty when the barrier had none."""
@@ -336,7 +400,10 @@ def read_nhtsa(path: str | Path, barrier: bool = True, progress=None) -> SensorT
     Returns
     -------
     SensorTest
-        Accelerations in m/s^2 forward positive; barrier forces in N, compressive positive.
+        Accelerations in m/s^2 forward positive; barrier forces in N, compressive positive;
+        ``engine`` the usable engine X accelerometers (see the module's notes on data
+        status: curve 96 of 10146 ends at 67 ms and is skipped, curve 95 covers the test),
+        engine channels that cannot be used skipped with a note.
 
     Raises
     ------
@@ -352,19 +419,34 @@ def read_nhtsa(path: str | Path, barrier: bool = True, progress=None) -> SensorT
     """
     header = read_ev5_header(path)
     motion, notes = vehicle_motion_channels(header)
+    engine, enotes = engine_channels(header)
+    notes += enotes
     chosen: list[Ev5Channel] = []
     if barrier:
         chosen, bnotes = barrier_force_channels(header)
         notes += bnotes
-    total = len(motion) + len(chosen)
-    loaded = []
-    for k, (ch, sign) in enumerate([(c, 1.0) for c in motion] + [(c, -1.0) for c in chosen]):
-        loaded.append(_to_channel(header, ch, sign))
+    todo = [(c, "vehicle") for c in motion] + [(c, "engine") for c in engine] + [(c, "barrier") for c in chosen]
+    loaded: dict[str, list] = {"vehicle": [], "engine": [], "barrier": []}
+    for k, (ch, kind) in enumerate(todo):
+        if kind == "engine":
+            loaded[kind].append(_engine_channel(header, ch, notes))
+        else:
+            loaded[kind].append(_to_channel(header, ch, -1.0 if kind == "barrier" else 1.0))
         if progress is not None:
-            progress(k + 1, total, "reading channels")
-    vehicle, cells = tuple(loaded[:len(motion)]), tuple(loaded[len(motion):])
+            progress(k + 1, len(todo), "reading channels")
+    vehicle, cells = tuple(loaded["vehicle"]), tuple(loaded["barrier"])
+    rows = {str(c.curve): c for c in engine}
+    kept, skipped = usable_engine_channels(vehicle[0].t, [c for c in loaded["engine"] if c is not None],
+                                           label=lambda c: rows[c.code].label())
+    notes += skipped
+    for c in kept:
+        row = rows[c.code]
+        if not row.valid:
+            notes.append(f"engine {row.label()}: header marks its data {row.status!r} (channel failed) with no "
+                         f"valid data after {row.valid_until_s * 1e3:g} ms; its samples up to "
+                         f"{c.t[-1] * 1e3:.1f} ms are used")
     if cells:
         notes.append(f"barrier force: sum of {len(cells)} X load cell(s)")
     return SensorTest(source=str(header.path), impact_speed_mps=header.speed_kmh / 3.6,
                       mass_kg=header.mass_kg, vehicle=vehicle, barrier=cells,
-                      title=header.title, notes=tuple(notes))
+                      title=header.title, notes=tuple(notes), engine=kept)

@@ -10,6 +10,14 @@ mechanism of ``Params.mechanisms`` in order:
 - ``front_blocked(blocked, crush, vehicle) -> blocked``: the fraction (0..1) by which the
   front wheels are blocked, given the fraction so far.
 
+A mechanism with ``has_body`` is a second body moving along x (the engine): it takes
+``detached_mass()`` (kg) out of the cabin's x inertia and carries its own state through the
+integration: ``body_init(speed) -> state``; ``body_forces(state, q, v) -> (force on the
+cabin along x (N), force on the barrier (N), aux)`` at the step's start; ``body_advance(state,
+(cabin force, barrier force), aux, q_new, v_new, dt) -> new state`` (semi-implicit Euler,
+like the cabin); ``body_observed(state, new_state, barrier force) -> {engine_x, engine_vx,
+engine_force, engine_crush, mounts_broken}`` for the Trajectory. At most one such mechanism.
+
 Adding a mechanism is one new module with one class: its equation in the docstring, its
 parameters as fields (arrays) with units, its effect name (``docs/interface.md``) and a
 one-sentence explanation an expert can check.
@@ -26,6 +34,7 @@ class Mechanism(eqx.Module):
     """An optional piece of physics (override the hooks it changes)."""
 
     effect: ClassVar[str] = ""
+    has_body: ClassVar[bool] = False
     explanation: ClassVar[str] = ""
     units: ClassVar[dict[str, str]] = {}
 
