@@ -43,3 +43,23 @@ def sample_results(tmp_path_factory):
     out = tmp_path_factory.mktemp("sample") / "a4_paper.identify"
     assert main(["fit", str(SAMPLE_FILM), "--vehicle", "audi_a4", "--out", str(out), "--quiet"]) == 0
     return out
+
+
+NHTSA_10146 = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146" / "v10146.EV5"
+
+
+@pytest.fixture(scope="session")
+def test10146():
+    """The real NHTSA test 10146 as read (vehicle, engine and barrier channels), shared by
+    the recording, engine and force-check tests."""
+    from identify.recordings import read_nhtsa
+
+    return read_nhtsa(NHTSA_10146)
+
+
+@pytest.fixture(scope="session")
+def motion(test10146):
+    """10146's measured motion (``measurement_from_test``)."""
+    from identify.recordings import measurement_from_test
+
+    return measurement_from_test(test10146)

@@ -16,16 +16,6 @@ DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 
 
 @pytest.fixture(scope="module")
-def test10146():
-    return read_nhtsa(DATA / "v10146.EV5")
-
-
-@pytest.fixture(scope="module")
-def motion(test10146):
-    return measurement_from_test(test10146)
-
-
-@pytest.fixture(scope="module")
 def force(test10146):
     return measured_force(test10146)
 

@@ -17,16 +17,6 @@ DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 HEADER = DATA / "v10146.EV5"
 
 
-@pytest.fixture(scope="module")
-def test10146():
-    return read_nhtsa(HEADER)
-
-
-@pytest.fixture(scope="module")
-def motion(test10146):
-    return measurement_from_test(test10146)
-
-
 def _copy(tmp_path, curves=(93, 94, 99, 100, 900), edit=None):
     """A copy of the trimmed test in tmp_path, header rows edited by ``edit(fields)``."""
     lines = HEADER.read_text(encoding="latin-1").splitlines()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from identify.errors import UserError
-from identify.recordings import (Channel, SensorTest, contact_time, measurement_from_test, read_isomme,
+from identify.recordings import (Channel, contact_time, measurement_from_test, read_isomme,
                                  read_nhtsa, write_isomme)
 from identify.recordings.isomme import is_engine_motion
 from identify.recordings.motion import G0, combine
@@ -21,16 +21,6 @@ DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 HEADER = DATA / "v10146.EV5"
 WORLD_SEED = 137  # below 1000 (the benchmark's seeds start at 910,000), used by no other test
 ENGINE = ("engine_x_m", "engine_vx_mps")
-
-
-@pytest.fixture(scope="module")
-def test10146():
-    return read_nhtsa(HEADER)
-
-
-@pytest.fixture(scope="module")
-def motion(test10146):
-    return measurement_from_test(test10146)
 
 
 def _copy(tmp_path, edit=None, curves=(93, 94, 95, 96, 99, 100, 900)):
