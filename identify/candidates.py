@@ -21,6 +21,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from identify.evidence import front_wheels_blocked
 from identify.model import FreeParameter, base_parameters
 from sim import EngineImpact, FrontWheelBlock, Params, ProgressiveStiffness, RateDependence, StiffnessZone
 
@@ -42,6 +43,10 @@ class Candidate:
     text : the one-sentence explanation when there is no mechanism class.
     priors : callable(vehicle) -> {``effect.field``: (value, sigma)}: what is known of its
         parameters before any fit (``identify.fitting.fit``'s ``priors``), or None.
+    typical : callable(vehicle) -> {``effect.field``: value}: typical values a start may use
+        (``"typical"`` in ``starts``), or None.
+    evidence : callable(fit, vehicle, window_ms) -> (reason, evidence) checking what the
+        mechanism implies for a channel measured directly (``identify.evidence``), or None.
     """
 
     effect: str
@@ -52,6 +57,8 @@ class Candidate:
     report: dict[str, str]
     text: str = ""
     priors: object = None
+    evidence: object = None
+    typical: object = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -73,6 +80,7 @@ CANDIDATES: tuple[Candidate, ...] = (
         {"depth": NEVER_REACHED},
         ({"depth": "wheel_window"},),
         {"depth": "depth_m"},
+        evidence=front_wheels_blocked,
     ),
     Candidate(
         "stiffness_zone", StiffnessZone,
@@ -114,13 +122,25 @@ ENGINE_MASS_REL_SIGMA = 0.3
 ENGINE_GAP_SIGMA_M = 0.1
 
 
-def engine_priors(vehicle) -> dict[str, tuple[float, float]]:
-    """The engine's mass and gap as the vehicle file estimates them (else 13 % of the mass
-    and 0.35 m), with one-sigma errors of 30 % and 0.1 m (``data/README.md``)."""
+def engine_typical(vehicle) -> dict[str, float]:
+    """Where the engine fit starts: the vehicle file's engine mass and gap, else 13 % of the
+    mass and 0.35 m."""
     mass = vehicle.engine_mass if vehicle.engine_mass is not None else ENGINE_MASS_FRACTION * float(vehicle.mass)
     gap = vehicle.engine_gap if vehicle.engine_gap is not None else ENGINE_GAP_M
-    return {"engine_impact.engine_mass": (mass, ENGINE_MASS_REL_SIGMA * mass),
-            "engine_impact.gap": (gap, ENGINE_GAP_SIGMA_M)}
+    return {"engine_impact.engine_mass": float(mass), "engine_impact.gap": float(gap)}
+
+
+def engine_priors(vehicle) -> dict[str, tuple[float, float]]:
+    """What is known of the engine before the fit (``data/README.md``): its mass, the vehicle
+    file's or else 13 % of the car's (engines and gearboxes weigh 10-20 %), +-30 %; its gap
+    only when the vehicle file states it (+-0.1 m). A typical gap is no measurement: it would
+    pull the fit of a car whose engine never reaches the barrier towards one that does."""
+    typical = engine_typical(vehicle)
+    mass = typical["engine_impact.engine_mass"]
+    out = {"engine_impact.engine_mass": (mass, ENGINE_MASS_REL_SIGMA * mass)}
+    if vehicle.engine_gap is not None:
+        out["engine_impact.gap"] = (float(vehicle.engine_gap), ENGINE_GAP_SIGMA_M)
+    return out
 
 
 CANDIDATES = CANDIDATES + (
@@ -132,10 +152,11 @@ CANDIDATES = CANDIDATES + (
          _p("engine_impact", "k_rear", "N/m", "log", scale=1e6)),
         {"engine_mass": 0.0, "gap": NEVER_REACHED, "k_engine": 3e6, "k_rear": 1e6, "restitution_engine": 0.1,
          "mount_stiffness": 8e5, "mount_break_force": 5e4},
-        ({"engine_mass": "prior", "gap": "prior", "k_engine": 3e6, "k_rear": 1e6},),
+        ({"engine_mass": "typical", "gap": "typical", "k_engine": 3e6, "k_rear": 1e6},),
         {"engine_mass": "engine_mass_kg", "gap": "gap_m", "k_engine": "k_engine_N_per_m",
          "k_rear": "k_rear_N_per_m"},
         priors=engine_priors,
+        typical=engine_typical,
     ),
 )
 
@@ -185,7 +206,7 @@ def neutral_values(vehicle) -> dict[str, float]:
     out = {}
     for c in CANDIDATES:
         for name in c.names:
-            f, v = name.split(".", 1)[1], c.neutral[name.split(".", 1)[1]]
+            v = c.neutral[name.split(".", 1)[1]]
             if v == "vehicle":
                 field, index = VEHICLE_OVERRIDES[name]
                 v = np.asarray(getattr(vehicle, field))[index]
@@ -206,7 +227,7 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None) -> list[d
     current model's maximum crush; ``"wheel_window"`` the current model's crush where the
     strongest misfit window of the front wheel angle starts (the wheels stop turning
     there), else where the crush reaches the tyre (front overhang minus wheel radius);
-    ``"prior"`` the candidate's prior value (:func:`engine_priors`).
+    ``"typical"`` the candidate's typical value (:func:`engine_typical`).
     """
     from identify.residuals import model_crush
 
@@ -224,8 +245,8 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None) -> list[d
                         value = crush
             elif value == "vehicle":
                 value = neutral_values(vehicle)[f"{candidate.effect}.{field}"]
-            elif value == "prior":
-                value = candidate.priors(vehicle)[f"{candidate.effect}.{field}"][0]
+            elif value == "typical":
+                value = candidate.typical(vehicle)[f"{candidate.effect}.{field}"]
             elif value == "half_crush":
                 value = 0.5 * float(np.max(np.asarray(fr.trajectory.crush)))
             elif field == "k_zone":

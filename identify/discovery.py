@@ -18,8 +18,10 @@ The loop (one round per effect):
    compiled solve (a superset model with every mechanism, unused ones held at values that
    switch them off);
 3. the best candidate by the Bayesian information criterion BIC = chi2 + k ln n (chi2 and
-   n divided by each channel's autocorrelation time, so that correlated tracking errors
-   do not count as independent evidence) is accepted only when it lowers the BIC by at
+   n divided by each channel's noise autocorrelation time, so that correlated tracking
+   errors do not count as independent evidence; one time per channel for the whole round
+   (:func:`round_tau`), so every candidate is scored alike: :func:`choose` decides) is
+   accepted only when it lowers the BIC by at
    least ``min_bic_gain``, its mechanism is active inside the recorded crash (a depth the
    crush reaches) and it predicts held-out parts of the recording better than the current
    model (two-fold block cross-validation: fit on alternate ``cv_block_ms`` blocks,
@@ -178,8 +180,47 @@ def plot_discovery(result: "DiscoveryResult", out_dir, vehicle=None) -> list[str
     return _plot(result, out_dir, vehicle)
 
 
-def _tau(fr: FitResult) -> dict[str, float]:
-    return {c: max(1.0, float(v)) for c, v in fr.correlation_time.items()}
+def round_tau(fits) -> dict[str, float]:
+    """Per channel, the effective autocorrelation time (samples) that every BIC of one round
+    uses: the smallest of the round's fits (the current model and each candidate), the one
+    whose residual is nearest the recording's own noise. The current model's alone would
+    count the misfit being looked for as correlated noise; each candidate's own would give
+    every candidate its own sample count, and a candidate with a lower chi2 and no more
+    parameters could lose."""
+    out: dict[str, float] = {}
+    for fr in fits:
+        for c, v in fr.correlation_time.items():
+            out[c] = min(out.get(c, math.inf), max(1.0, float(v)))
+    return out
+
+
+def score(fits: dict[str, FitResult], current: FitResult, tau: dict[str, float]) -> list[Trial]:
+    """One Trial per candidate fit (effect -> FitResult): its chi2 and BIC change against
+    ``current``, every one counted with the same ``tau`` (:func:`round_tau`)."""
+    return [Trial(effect, sum(channel_chi2(fr, tau).values()), bic(fr, tau) - bic(current, tau), None,
+                  {n: fr.values[n] for n in BY_EFFECT[effect].names}, False, "")
+            for effect, fr in fits.items()]
+
+
+def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
+    """The round's decision: ``trials`` sorted by BIC change (best first), the first whose
+    BIC falls by at least ``min_bic_gain`` and that ``vet`` passes marked accepted, every
+    other one with the reason it was not.
+
+    vet : callable(effect) -> (reason, held-out chi2 gain or None); reason '' passes.
+        Called only for candidates the BIC justifies, best first, until one passes.
+    """
+    out, chosen = [], False
+    for tr in sorted(trials, key=lambda tr: tr.delta_bic):
+        if not tr.delta_bic <= -min_bic_gain:
+            out.append(dataclasses.replace(tr, reason=f"BIC change {tr.delta_bic:+.1f} is not below -{min_bic_gain:g}"))
+        elif chosen:
+            out.append(dataclasses.replace(tr, reason="another candidate was accepted"))
+        else:
+            why, gain = vet(tr.effect)
+            chosen = not why
+            out.append(dataclasses.replace(tr, cv_gain=gain, accepted=chosen, reason=why))
+    return out
 
 
 def bic(fr: FitResult, tau: dict[str, float]) -> float:
@@ -258,7 +299,7 @@ class _UnitArea:
     contact_area = 1.0
 
 
-def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain) -> dict:
+def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain, vehicle) -> dict:
     """The result.json entry of an effect accepted with fit ``after`` over ``before``."""
     gains = {ch: channel_chi2(before, tau)[ch] - v for ch, v in channel_chi2(after, tau).items()}
     entry = {
@@ -271,13 +312,14 @@ def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain) 
         "held_out_chi2_gain": cv_gain,
     }
     window = effect_window_ms(after, effect) or (0.0, float(after.measurement.t.max()) * 1e3)
-    _describe(entry, after, window)
+    _describe(entry, after, window, vehicle)
     return entry
 
 
-def _describe(entry: dict, fr: FitResult, window) -> None:
+def _describe(entry: dict, fr: FitResult, window, vehicle) -> None:
     """Set a named effect's explanation and parameters in ``entry`` as fit ``fr`` has them and, when
-    ``window`` (ms) is given, its window, the crush range over it and the phases it spans."""
+    ``window`` (ms) is given, its window, the crush range over it, the phases it spans and
+    what a directly measured channel shows of it (``evidence``)."""
     c = BY_EFFECT[entry["effect"]]
     mech = next((m for m in fr.params.mechanisms if m.effect == entry["effect"]), None)
     entry["explanation"] = mech.explain(fr.params) if mech is not None else c.explanation
@@ -286,6 +328,8 @@ def _describe(entry: dict, fr: FitResult, window) -> None:
         entry["window_ms"] = [float(window[0]), float(window[1])]
         entry["crush_window_m"] = [round(float(crush.min()), 3), round(float(crush.max()), 3)]
         entry["phase"] = phases_spanned(window, phase_times_ms(fr))
+        if c.evidence is not None:
+            entry["evidence"] = c.evidence(fr, vehicle, window)[1]
     entry["parameters"] = {c.report[p.name.split(".", 1)[1]]: {"value": fr.values[p.name], "unit": p.unit,
                                                                "std": fr.std[p.name]} for p in c.parameters}
 
@@ -311,12 +355,20 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
                 "): it trades against the prior rather than explaining the misfit")
     for p in BY_EFFECT[effect].parameters:
         value, sd = fr.values[p.name], fr.std[p.name]
+        if fr.at_bound.get(p.name):
+            return f"{p.name} ended {fr.at_bound[p.name]}: the bound, not the recording, set it"
         if not np.isfinite(sd):
             return f"{p.name} is not determined by the data"
         if p.name.endswith(".depth") and value > crush_max - 0.005:
             return f"its depth ({value:.3f} m) is not reached (maximum crush {crush_max:.3f} m)"
         if p.name.endswith(".depth") and sd > 0.1:
             return f"its depth is not determined (std {sd:.3f} m)"
+    evidence = BY_EFFECT[effect].evidence
+    window = effect_window_ms(fr, effect) if evidence is not None else None
+    if window is not None:
+        why = evidence(fr, vehicle, window)[0]
+        if why:
+            return why
     if effect == "rear_axle_lift":
         from identify.candidates import neutral_values
 
@@ -401,7 +453,7 @@ def discover(
 
     now = before
     while screen and len(accepted) - len(measured) < options.max_effects:
-        trials, fits = [], {}
+        fits = {}
         todo = [c for c in CANDIDATES if c.effect not in accepted]
         for i, c in enumerate(todo):
             say(f"discovery: round {len(rounds) + 1}, candidate {c.effect} ({i + 1} of {len(todo)})")
@@ -416,41 +468,28 @@ def discover(
             if best is None:
                 continue
             fits[c.effect] = best
-            tau = _tau(best)
-            d = bic(best, tau) - bic(current, tau)
-            trials.append(Trial(c.effect, sum(channel_chi2(best, tau).values()), d, None,
-                                {n: best.values[n] for n in c.names}, False, ""))
-        trials.sort(key=lambda tr: tr.delta_bic)
-        chosen = None
-        for k, tr in enumerate(trials):
-            if chosen is not None:
-                trials[k] = dataclasses.replace(tr, reason="another candidate was accepted")
-                continue
-            if tr.delta_bic > -options.min_bic_gain:
-                trials[k] = dataclasses.replace(tr, reason=f"BIC change {tr.delta_bic:+.1f} is not below "
-                                                           f"-{options.min_bic_gain:g}")
-                continue
-            cand = fits[tr.effect]
-            why = _plausible(tr.effect, cand, vehicle)
+        tau = round_tau([current, *fits.values()])  # one effective sample count for the whole round
+        trials = score(fits, current, tau)
+
+        def vet(effect: str) -> tuple[str, float | None]:
+            why = _plausible(effect, fits[effect], vehicle)
             if why:
-                trials[k] = dataclasses.replace(tr, reason=why)
-                continue
-            say(f"discovery: held-out check of {tr.effect}")
-            tau = _tau(cand)
+                return why, None
+            say(f"discovery: held-out check of {effect}")
             cur_cv = _held_out_chi2(cv_fits(tuple(accepted), current.values), folds, measurement, tau)
-            new_cv = _held_out_chi2(cv_fits((*accepted, tr.effect), cand.values), folds, measurement, tau)
+            new_cv = _held_out_chi2(cv_fits((*accepted, effect), fits[effect].values), folds, measurement, tau)
             gain = cur_cv - new_cv
             if gain <= 0:
-                trials[k] = dataclasses.replace(tr, cv_gain=gain, reason=f"does not predict held-out data better "
-                                                                         f"(chi2 gain {gain:+.1f})")
-                continue
-            trials[k] = dataclasses.replace(tr, cv_gain=gain, accepted=True)
-            chosen = (tr.effect, cand, tau, gain)
+                return f"does not predict held-out data better (chi2 gain {gain:+.1f})", gain
+            return "", gain
+
+        trials = choose(trials, options.min_bic_gain, vet)
         rounds.append(trials)
+        chosen = next((tr for tr in trials if tr.accepted), None)
         if chosen is None:
             break
-        effect, cand, tau, gain = chosen
-        entry = _discovery_entry(effect, current, cand, tau, gain)
+        effect, cand = chosen.effect, fits[chosen.effect]
+        entry = _discovery_entry(effect, current, cand, tau, chosen.cv_gain, vehicle)
         chosen_bic = next(tr.delta_bic for tr in trials if tr.accepted)
         entry["alternatives"] = [{"effect": tr.effect, "bic_above_accepted": tr.delta_bic - chosen_bic}
                                  for tr in trials if not tr.accepted and tr.delta_bic - chosen_bic < options.min_bic_gain]
@@ -473,7 +512,7 @@ def discover(
 
     for entry in discoveries:  # parameters and windows as the final model (all effects together) has them
         if entry["effect"] in BY_EFFECT:
-            _describe(entry, current, effect_window_ms(current, entry["effect"]))
+            _describe(entry, current, effect_window_ms(current, entry["effect"]), vehicle)
     final = _final(current, accepted)
     status = _status(discoveries, before, after)
     return DiscoveryResult(discoveries, final, start, status, before, after, rounds, missing)

@@ -73,7 +73,10 @@ class FitResult:
 
     values, std : name -> value, one-sigma uncertainty.
     covariance, correlation : (p, p) in the order of ``names``.
-    identified : name -> (bool, reason) for the collision parameters.
+    identified : name -> (bool, reason) for the collision parameters, and for any fitted
+        quantity that ended at a bound of its transform.
+    at_bound : name -> which bound, for fitted quantities within 1 % of a bound of their
+        transform's range (``FreeParameter.at_bound``).
     rms : channel -> RMS residual in the channel's unit; rms_m the x channel's (m).
     chi2, dof : weighted sum of squares and degrees of freedom.
     converged : the best start converged; starts_at_best : how many starts reached it;
@@ -107,6 +110,7 @@ class FitResult:
     model: str = "base"
     correlation_time: dict[str, float] = dataclasses.field(default_factory=dict)
     priors: dict[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
+    at_bound: dict[str, str] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -452,6 +456,12 @@ def fit(
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
     )
     result.identified = assess_identifiability(result, channels)
+    # no silent bounds: a value the bound stopped is not a value the data gave
+    result.at_bound = {p.name: p.at_bound(result.values[p.name]) for p in free if p.at_bound(result.values[p.name])}
+    for name, why in result.at_bound.items():
+        ok, reason = result.identified.get(name, (True, ""))
+        result.identified[name] = (False, f"{reason}; it ended {why}" if not ok else
+                                   f"not identified: {why}, where the fit stopped it")
     if require_convergence and not result.converged and result.reduced_chi2 > 100:
         raise UserError(
             f"{measurement.source}: the fit did not converge (reduced chi-square {result.reduced_chi2:.3g} after"

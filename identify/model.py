@@ -61,6 +61,25 @@ class FreeParameter:
             return self.centre + self.scale * jnp.tanh(u)
         return self.centre + self.scale * u
 
+    AT_BOUND = 0.01  # within this share of its range of a bound, a value is "at its bound"
+
+    def at_bound(self, value: float) -> str:
+        """'' when ``value`` lies inside its transform's range, else which bound it sits at
+        (within ``AT_BOUND`` of the range): a fit that ends there was stopped by the bound,
+        not by the data. ``log`` and ``linear`` transforms have no bound."""
+        if self.transform == "logit":
+            lo, hi = self.lower, self.upper
+        elif self.transform == "tanh":
+            lo, hi = self.centre - self.scale, self.centre + self.scale
+        else:
+            return ""
+        share = (float(value) - lo) / (hi - lo)
+        if share <= self.AT_BOUND:
+            return f"at its lower bound {lo:.4g} {self.unit}"
+        if share >= 1.0 - self.AT_BOUND:
+            return f"at its upper bound {hi:.4g} {self.unit}"
+        return ""
+
     def to_unconstrained(self, value: float) -> float:
         if self.transform == "log":
             return math.log(value / self.scale)

@@ -85,6 +85,8 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         if fitted:
             lines.append(f"  {fitted}")
         lines.append(f"  x RMS {d['rms_before_m'] * 1e3:.2f} -> {d['rms_after_m'] * 1e3:.2f} mm")
+        if d.get("evidence"):
+            lines.append(f"  Evidence: {d['evidence']}")
     check = doc.get("force_check")
     if check:
         lines += _force_check_lines(check, doc)

@@ -63,3 +63,4 @@ def motion(test10146):
     from identify.recordings import measurement_from_test
 
     return measurement_from_test(test10146)
+

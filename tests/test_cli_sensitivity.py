@@ -110,7 +110,9 @@ def test_csv_tables(result_run):
         runs = list(csv.DictReader(f))
     assert len(runs) == 256 and runs[0]["rear_wheel_touchdown_time"] == ""
     crush = np.array([float(r["max_crush"]) for r in runs])
-    assert np.mean((crush >= p05) & (crush <= p95)) == pytest.approx(0.9, abs=0.01)
+    # intervals.csv reports the 5th and 95th percentiles of the samples monte_carlo.csv lists
+    # (whether such intervals cover the truth: tests/test_sensitivity.py)
+    assert (p05, p95) == pytest.approx((np.percentile(crush, 5), np.percentile(crush, 95)), rel=1e-3)
     assert len({r["k_compression"] for r in runs}) == 256 and len({r["mass"] for r in runs}) == 256
 
 

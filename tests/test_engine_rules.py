@@ -7,28 +7,29 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from identify.candidates import ENGINE_GAP_M, ENGINE_MASS_FRACTION, engine_priors, measured_effects
+from identify.candidates import ENGINE_GAP_M, ENGINE_MASS_FRACTION, engine_priors, engine_typical, measured_effects
 from identify.discovery import _plausible
 from identify.fitting import FitResult
 from identify.identification import _second_body_notes
 
 
 def fake_fit(values, std, priors, channels=("x_m", "vx_mps")):
-    fr = SimpleNamespace(values=values, std=std, priors=priors, PULL_CONFLICT=FitResult.PULL_CONFLICT,
+    fr = SimpleNamespace(values=values, std=std, priors=priors, PULL_CONFLICT=FitResult.PULL_CONFLICT, at_bound={},
                          trajectory=SimpleNamespace(crush=np.array([0.0, 0.5]), engine_force=np.array([0.0, 1e5])),
                          measurement=SimpleNamespace(channels={c: None for c in channels}))
     fr.pulls = lambda: FitResult.pulls(fr)
     return fr
 
 
-def test_engine_priors_come_from_the_vehicle_file_else_from_stated_typical_values(a4):
+def test_engine_priors_come_from_the_vehicle_file_and_a_gap_only_from_it(a4):
     p = engine_priors(a4)  # data/vehicles/audi_a4.toml gives engine_mass 205 kg, engine_gap 0.35 m
     assert p["engine_impact.engine_mass"] == (205.0, pytest.approx(0.3 * 205.0))
     assert p["engine_impact.gap"] == (0.35, 0.1)
     bare = SimpleNamespace(engine_mass=None, engine_gap=None, mass=1500.0)
     p = engine_priors(bare)
     assert p["engine_impact.engine_mass"][0] == pytest.approx(ENGINE_MASS_FRACTION * 1500.0)
-    assert p["engine_impact.gap"][0] == ENGINE_GAP_M
+    # a typical gap is where the fit starts, never a prior: nothing was measured
+    assert "engine_impact.gap" not in p and engine_typical(bare)["engine_impact.gap"] == ENGINE_GAP_M
 
 
 def test_a_pull_beyond_three_sigma_is_a_conflict_and_within_it_is_not():
@@ -71,3 +72,56 @@ def test_a_sensor_recording_without_engine_channels_says_what_it_cannot_tell():
     assert _second_body_notes(with_engine, sensors) == []
     assert measured_effects(with_engine.measurement) == ("engine_impact",)
     assert _second_body_notes(without, SimpleNamespace(sensor_test=None)) == []  # a film says nothing of it
+
+
+def _cabin_fit(x_error_m, names, k_compression, with_engine):
+    """A fit whose cabin x misses by +-x_error_m in turn over 200 samples of sigma 1 mm."""
+    from identify.measurement import Measurement
+
+    n = 200
+    t = np.linspace(0.0, 0.2, n)
+    ch = {"x_m": np.zeros(n)}
+    if with_engine:
+        ch["engine_vx_mps"] = np.zeros(n)
+    m = Measurement(t=t, channels=ch, sigma={c: np.full(n, 1e-3 if c == "x_m" else 0.1) for c in ch})
+    pred = {"x_m": x_error_m * (-1.0) ** np.arange(n)}
+    if with_engine:
+        pred["engine_vx_mps"] = np.full(n, 0.5)
+    return SimpleNamespace(measurement=m, predictions=pred, names=tuple(names), correlation_time={c: 1.0 for c in ch},
+                           values={"k_compression": k_compression}, std={"k_compression": 0.02 * k_compression},
+                           rms={"engine_vx_mps": 0.5} if with_engine else {})
+
+
+ONE_BODY_NAMES = ("k_compression", "k_restitution", "restitution", "impact_speed", "contact_time")
+TWO_BODY_NAMES = ONE_BODY_NAMES + ("engine_impact.engine_mass", "engine_impact.gap", "engine_impact.k_engine",
+                                   "engine_impact.k_rear")
+
+
+def test_a_second_body_the_cabin_does_not_bear_out_is_a_warning_with_both_stiffnesses():
+    from identify.identification import second_body_warning
+
+    one = _cabin_fit(0.002, ONE_BODY_NAMES, 1.30e6, with_engine=False)
+    two = _cabin_fit(0.002, TWO_BODY_NAMES, 0.95e6, with_engine=True)  # the same cabin misfit, 4 more parameters
+    text = second_body_warning(two, one)
+    assert "does not explain the cabin's motion better" in text
+    assert "9.5e+05 N/m^3 with two bodies" in text and "1.3e+06 +- 2.6e+04 N/m^3 with the cabin alone" in text
+
+
+def test_a_second_body_that_explains_the_cabin_is_not_questioned():
+    from identify.identification import second_body_warning
+
+    one = _cabin_fit(0.003, ONE_BODY_NAMES, 1.30e6, with_engine=False)
+    two = _cabin_fit(0.001, TWO_BODY_NAMES, 1.25e6, with_engine=True)  # cabin chi2 1800 -> 200
+    assert second_body_warning(two, one) == ""
+    assert second_body_warning(one, one) == ""  # no engine channel: nothing to question
+    assert second_body_warning(two, None) == ""
+
+
+def test_a_cabin_improvement_the_four_engine_parameters_do_not_pay_for_is_a_warning():
+    """chi2 800 -> 770 on the cabin: 30 better, but 4 more parameters cost 4 ln 200 = 21.2, and
+    the BIC must fall by 10."""
+    from identify.identification import second_body_warning
+
+    one = _cabin_fit(0.002, ONE_BODY_NAMES, 1.30e6, with_engine=False)
+    two = _cabin_fit(0.002 * (770 / 800) ** 0.5, TWO_BODY_NAMES, 1.25e6, with_engine=True)
+    assert "does not explain the cabin's motion better" in second_body_warning(two, one)

@@ -1,4 +1,8 @@
-"""The fit recovers known parameters with honest uncertainty and says what it cannot see."""
+"""The fit, as round trips: recordings made with ``sim`` (the fit's own model) plus noise go in,
+and the fit must give back the parameters they were made with, with honest uncertainty, and
+say what it cannot see. Round trips show the least squares, the covariance and the
+identifiability rules work; accuracy on crashes the model did not make is measured on the
+reference world (``benchmarks/accuracy.py``) and the NHTSA test (``tests/test_end_to_end.py``)."""
 
 import dataclasses
 
@@ -31,8 +35,18 @@ def test_recovers_the_papers_parameters_within_two_sigma(paper_fit):
     for name, truth in TRUTH.items():
         assert abs(v[name] - truth) < 2 * s[name], name
         assert s[name] > 0
-    assert v["contact_time"] == pytest.approx(0.0004, abs=0.0005)
+    assert abs(v["contact_time"] - 0.0004) < 3 * s["contact_time"]  # s; how fine: the next test
     assert all(ok for ok, _ in paper_fit.identified.values())
+
+
+def test_contact_time_is_resolved_to_a_tenth_of_a_millisecond_at_film_noise(a4):
+    """At the sample film's tracking noise (0.3 mm) the contact time is fixed to about 0.04 ms:
+    a fit that returned 0 for a contact 0.4 ms after the clock's zero would be 9 sigma off."""
+    noise = {"x_m": 0.0003, "z_m": 0.0003, "pitch_rad": 0.0004, "front_wheel_angle_rad": 0.002,
+             "rear_wheel_angle_rad": 0.002}
+    r = fit(synthetic_measurement(a4, named_params("paper_identified"), noise=noise, contact_time=0.0004), a4)
+    assert r.std["contact_time"] < 0.0001
+    assert abs(r.values["contact_time"] - 0.0004) < 3 * r.std["contact_time"]
 
 
 def test_fit_rms_is_the_noise_level(paper_fit):
@@ -112,3 +126,30 @@ def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement):
 
     with pytest.raises(UserError, match="did not converge"):
         fit(paper_measurement, a4, options=FitOptions(starts=1, max_steps=1))
+
+
+@pytest.mark.parametrize("transform, kw, value, words", [
+    ("logit", {"lower": 0.05, "upper": 1.2}, 0.0511, "at its lower bound 0.05"),
+    ("logit", {"lower": 0.05, "upper": 1.2}, 1.19, "at its upper bound 1.2"),
+    ("logit", {"lower": 0.05, "upper": 1.2}, 0.07, ""),
+    ("tanh", {"scale": 0.010}, -0.0099, "at its lower bound -0.01"),
+    ("tanh", {"scale": 0.010}, 0.0097, ""),
+    ("log", {"scale": 1e6}, 1e-3, ""),
+])
+def test_a_value_within_one_percent_of_a_bound_is_at_its_bound(transform, kw, value, words):
+    from identify.model import FreeParameter
+
+    where = FreeParameter("p", "m", transform, **kw).at_bound(value)
+    assert (where.startswith(words) if words else where == ""), where
+
+
+def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_measurement):
+    """The recording's clock 25 ms off (contact at -25 ms, the model allows +-10 ms): the fit
+    parks the contact time at its bound, and must not report that value as measured."""
+    from identify.fitting import FitOptions
+
+    late = dataclasses.replace(paper_measurement, t=paper_measurement.t - 0.025)
+    r = fit(late, a4, options=dataclasses.replace(FitOptions(), starts=1))  # the same compile as the others
+    assert "contact_time" in r.at_bound and "bound" in r.at_bound["contact_time"]
+    ok, reason = r.identified["contact_time"]
+    assert not ok and "where the fit stopped it" in reason

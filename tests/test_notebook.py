@@ -113,35 +113,6 @@ def test_statistics_on_known_residuals(tmp_path):
     assert len([o for o in outputs(nb, "display_data") if "image/png" in o.data]) == 3
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("source", ["predictions.csv", "re-simulated from result.json"])
-def test_notebook_on_the_sample_fit(sample_results, tmp_path, source):
-    """On the sample's results folder, with the model from its predictions.csv and, for a
-    folder without one, re-simulated from result.json: the same RMS as the fit's."""
-    import shutil
-
-    folder = sample_results
-    if source != "predictions.csv":
-        folder = tmp_path / "no_predictions.identify"
-        shutil.copytree(sample_results, folder)
-        (folder / "predictions.csv").unlink()
-    nb, summary = run_notebook(folder, tmp_path / "summary.json")
-    doc = json.loads((folder / "result.json").read_text())
-    assert summary["model_source"] == source
-    assert set(summary["channels"]) == set(doc["fit"]["rms_by_channel"])
-    for c, ref in doc["fit"]["rms_by_channel"].items():
-        s = summary["channels"][c]
-        assert s["rms"] == pytest.approx(ref, rel=1e-4), c
-        assert s["windows"]["all"]["rms"] == pytest.approx(s["rms"], rel=1e-12)
-        assert 0.2 < s["std_norm"] < 2.0, c  # residuals of the order of the tracker's sigma
-    assert not summary["channels"]["vx_mps"]["fitted"] and summary["channels"]["x_m"]["fitted"]
-    comp_end = summary["windows_ms"]["compression"][1]
-    assert comp_end == pytest.approx(doc["model_events_ms"]["compression_end"])
-    assert 60 < comp_end < 70  # the paper's set compresses for about 65 ms
-    assert len([o for o in outputs(nb, "display_data") if "image/png" in o.data]) == 3
-    assert not outputs(nb, "error")
-
-
 def test_a_folder_that_is_not_a_results_folder_is_named_in_one_line(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(nbclient.exceptions.CellExecutionError) as info:

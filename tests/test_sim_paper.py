@@ -57,8 +57,16 @@ def test_default_parameters_position_error_as_in_fig6(identified_run, default_ru
 def test_front_wheels_block_and_unblock_with_crush(a4):
     params = dataclasses.replace(named_params("paper_identified"), mechanisms=(FrontWheelBlock.at_tyre(a4),))
     ev = events_ms(simulate(params, a4, PAPER_SPEED))
-    assert 44.0 <= ev["front_wheel_block"] <= 50.0
-    assert 110.0 <= ev["front_wheel_unblock"] <= 130.0
+    assert 47.0 - 1.0 <= ev["front_wheel_block"] <= 48.0 + 1.0  # the paper's 47-48 ms, one film frame either side
+    assert ev["front_wheel_unblock"] > ev["front_wheel_block"]
+
+
+@pytest.mark.xfail(strict=True, reason="the model unblocks the front wheels at 129.3 ms, the paper's film at "
+                   "117-121 ms (README, 'What it reproduces of the paper'); strict: passing means the model changed")
+def test_front_wheels_unblock_when_the_paper_says(a4):
+    params = dataclasses.replace(named_params("paper_identified"), mechanisms=(FrontWheelBlock.at_tyre(a4),))
+    ev = events_ms(simulate(params, a4, PAPER_SPEED))
+    assert 117.0 - 1.0 <= ev["front_wheel_unblock"] <= 121.0 + 1.0
 
 
 def test_blocked_wheel_stops_turning(a4):
@@ -76,10 +84,18 @@ def test_rear_wheels_lift_and_land_with_low_contact_plane(a4):
     # lift 38 ms, touchdown 596 ms; the paper's film: 69 ms and 210 ms (see README).
     run = simulate(named_params("paper_identified"), a4, PAPER_SPEED, duration=1.0)
     ev = events_ms(run)
-    assert ev["rear_wheel_lift"] is not None and 20.0 < ev["rear_wheel_lift"] < 100.0
+    assert ev["rear_wheel_lift"] is not None and ev["rear_wheel_lift"] < ev["compression_end"]
     assert ev["rear_wheel_touchdown"] is not None and ev["rear_wheel_touchdown"] > ev["rear_wheel_lift"] + 50.0
     airborne = np.asarray(run.rear_airborne)
     assert airborne[int(ev["rear_wheel_lift"]) + 5] and not airborne[-1]
+
+
+@pytest.mark.xfail(strict=True, reason="the model lifts the rear at 38 ms and lands it at 596 ms, the paper's film "
+                   "at 69 and 210 ms: a restoring effect the model leaves out (README); strict: passing means the model changed")
+def test_rear_wheels_lift_and_land_when_the_paper_says(a4):
+    ev = events_ms(simulate(named_params("paper_identified"), a4, PAPER_SPEED, duration=1.0))
+    assert ev["rear_wheel_lift"] == pytest.approx(69.0, abs=2.0)
+    assert ev["rear_wheel_touchdown"] == pytest.approx(210.0, abs=2.0)
 
 
 def test_no_rear_lift_with_force_through_cg(default_run):

@@ -57,12 +57,14 @@ def test_streams_frames_with_container_rate(mp4):
     film.close()
 
 
-def test_iteration_streams_one_frame_at_a_time(mp4):
+def test_iteration_yields_every_frame_as_random_access_reads_it(mp4):
     film = open_film(mp4)
     it = iter(film)
-    first = next(it)
-    assert isinstance(first, np.ndarray)  # a generator, not a list held in memory
-    assert not isinstance(film.__iter__(), (list, tuple))
+    np.testing.assert_array_equal(next(it), film[0])
+    rest = list(it)
+    assert len(rest) == len(film) - 1
+    for k in (1, len(film) // 2, len(film) - 1):
+        np.testing.assert_array_equal(rest[k - 1], film[k])
 
 
 def test_publication_rate_gets_a_note_and_fps_overrides_it(tmp_path):

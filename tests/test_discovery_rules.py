@@ -1,0 +1,306 @@
+"""The rules by which discovery decides what it tells the user, each tested on its own with
+hand-made inputs (no fit, no model: what would change the decision is set directly), so a
+rule inverted or removed fails a test here:
+
+- the BIC gate and the order of candidates (:func:`identify.discovery.choose`);
+- one effective sample count per round for every candidate (:func:`score`, :func:`round_tau`);
+- the plausibility checks of a candidate's fit (``_plausible``) and the evidence checks
+  against directly measured channels (``identify.evidence``);
+- the held-out prediction check (``_held_out_chi2``).
+
+Accuracy of discovery on data it did not make is measured on the reference world
+(``tests/test_discovery.py`` and ``benchmarks/accuracy.py``)."""
+
+import dataclasses
+import math
+import types
+
+import numpy as np
+import pytest
+
+from identify.candidates import neutral_values
+from identify.discovery import Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score
+from identify.evidence import front_wheels_blocked
+from identify.fitting import FitResult
+from identify.measurement import Measurement
+
+
+def trial(effect, delta_bic):
+    return Trial(effect, 0.0, delta_bic, None, {}, False, "")
+
+
+def passing(effect):
+    return "", 5.0
+
+
+# ---------------------------------------------------------------- the BIC gate: choose()
+
+def test_the_best_justified_candidate_is_accepted_and_the_rest_told_why_not():
+    calls = []
+
+    def vet(effect):
+        calls.append(effect)
+        return passing(effect)
+
+    out = choose([trial("a", -12.0), trial("b", -40.0), trial("c", 3.0)], 10.0, vet)
+    assert [t.effect for t in out] == ["b", "a", "c"]  # best (most negative) first
+    assert [t.accepted for t in out] == [True, False, False]
+    assert out[0].cv_gain == 5.0 and out[0].reason == ""
+    assert out[1].reason == "another candidate was accepted"
+    assert "not below -10" in out[2].reason
+    assert calls == ["b"]  # the held-out check runs only for what the BIC justifies, until one passes
+
+
+@pytest.mark.parametrize("delta", [-9.99, 0.0, 25.0, math.nan])
+def test_a_candidate_the_bic_does_not_justify_is_never_accepted(delta):
+    def vet(effect):
+        raise AssertionError("vetted a candidate the BIC does not justify")
+
+    out = choose([trial("a", delta)], 10.0, vet)
+    assert not out[0].accepted and "BIC change" in out[0].reason
+
+
+def test_lowering_the_bic_by_exactly_the_threshold_is_enough():
+    assert choose([trial("a", -10.0)], 10.0, passing)[0].accepted
+
+
+def test_a_vetoed_candidate_passes_the_turn_to_the_next():
+    def vet(effect):
+        return ("its depth is not reached", None) if effect == "b" else ("", 1.0)
+
+    out = choose([trial("a", -20.0), trial("b", -50.0)], 10.0, vet)
+    assert [(t.effect, t.accepted, t.reason) for t in out] == [
+        ("b", False, "its depth is not reached"), ("a", True, "")]
+
+
+def test_nothing_is_accepted_when_every_justified_candidate_is_vetoed():
+    out = choose([trial("a", -20.0), trial("b", -50.0)], 10.0,
+                 lambda e: ("does not predict held-out data better (chi2 gain -3.0)", -3.0))
+    assert not any(t.accepted for t in out) and all(t.cv_gain == -3.0 for t in out)
+
+
+# ---------------------------------------------------------------- one BIC per round
+
+def measurement(n=200, sigma=0.001):
+    t = np.linspace(0.0, 0.2, n)
+    return Measurement(t=t, channels={"x_m": np.zeros(n), "z_m": np.zeros(n)},
+                       sigma={"x_m": np.full(n, sigma), "z_m": np.full(n, sigma)})
+
+
+@dataclasses.dataclass
+class FakeFit:
+    """What discovery's rules read of a FitResult, set by hand."""
+
+    measurement: Measurement
+    predictions: dict
+    names: tuple = ("k_compression",)
+    values: dict = dataclasses.field(default_factory=dict)
+    std: dict = dataclasses.field(default_factory=dict)
+    priors: dict = dataclasses.field(default_factory=dict)
+    correlation_time: dict = dataclasses.field(default_factory=dict)
+    trajectory: object = None
+    params: object = None
+    contact_time: float = 0.0
+    at_bound: dict = dataclasses.field(default_factory=dict)
+    PULL_CONFLICT = FitResult.PULL_CONFLICT
+    pulls = FitResult.pulls
+
+
+def fit_with_residual(m, rms, names=("k_compression",), tau_own=1.0, **kw):
+    """A fit whose x residual is +-rms (m) in turn, z exact."""
+    r = rms * (-1.0) ** np.arange(len(m.t))
+    return FakeFit(m, {"x_m": -r, "z_m": np.zeros(len(m.t))}, tuple(names),
+                   correlation_time={"x_m": tau_own, "z_m": 1.0}, **kw)
+
+
+def test_bic_counts_chi2_and_samples_divided_by_tau():
+    m = measurement(n=200, sigma=0.001)
+    fr = fit_with_residual(m, 0.002, names=("a", "b", "c"))  # chi2 = 200 * 4 = 800
+    assert bic(fr, {}) == pytest.approx(800 + 3 * math.log(400), rel=1e-9)
+    assert bic(fr, {"x_m": 4.0}) == pytest.approx(200 + 3 * math.log(250), rel=1e-9)
+
+
+def test_a_candidate_with_a_lower_chi2_and_no_more_parameters_never_loses():
+    """The zone fitted the truth with a lower chi2 than blocking and still lost, because each
+    candidate's BIC counted its samples with its own residual autocorrelation time."""
+    m = measurement()
+    current = fit_with_residual(m, 0.004)
+    values = {"front_wheel_block.depth": 0.5, "stiffness_zone.depth": 0.4, "stiffness_zone.k_zone": 2e6}
+    # the zone fits better, but its own residuals happen to be more correlated: scored with their
+    # own autocorrelation times (chi2 / 30 against chi2 / 1) blocking would win
+    zone = fit_with_residual(m, 0.0015, names=("k_compression", "z.depth", "z.k"), tau_own=30.0, values=values)
+    block = fit_with_residual(m, 0.0020, names=("k_compression", "z.depth", "z.k"), tau_own=1.0, values=values)
+    current.correlation_time = {"x_m": 12.0, "z_m": 1.0}  # its misfit counted as correlated noise
+    tau = round_tau([current, zone, block])
+    assert tau == {"x_m": 1.0, "z_m": 1.0}  # the smallest of the round, the same for all
+    trials = score({"stiffness_zone": zone, "front_wheel_block": block}, current, tau)
+    best = choose(trials, 10.0, passing)[0]
+    assert best.effect == "stiffness_zone" and best.accepted
+    assert trials[0].delta_bic < trials[1].delta_bic < 0
+    assert trials[0].values == {"stiffness_zone.depth": 0.4, "stiffness_zone.k_zone": 2e6}
+
+
+# ---------------------------------------------------------------- plausibility of a candidate's fit
+
+def candidate_fit(values, std, crush_max=0.6, engine_force_max=0.0, priors=None, k_compression=1.0e6):
+    m = measurement()
+    traj = types.SimpleNamespace(t=np.linspace(0.0, 0.2, 50), crush=np.linspace(0.0, crush_max, 50),
+                                 engine_force=np.full(50, engine_force_max), front_blocked=np.zeros(50))
+    params = types.SimpleNamespace(k_compression=k_compression)
+    return FakeFit(m, {}, tuple(values), dict(values), dict(std), dict(priors or {}), {}, traj, params)
+
+
+@pytest.fixture(scope="module")
+def neutral(a4):
+    return neutral_values(a4)
+
+
+PLAUSIBLE = {
+    "front_wheel_block": ({"front_wheel_block.depth": 0.45}, {"front_wheel_block.depth": 0.01}),
+    "stiffness_zone": ({"stiffness_zone.depth": 0.40, "stiffness_zone.k_zone": 2.5e6},
+                       {"stiffness_zone.depth": 0.01, "stiffness_zone.k_zone": 0.2e6}),
+    "progressive_stiffness": ({"progressive_stiffness.progression": 1.5}, {"progressive_stiffness.progression": 0.2}),
+    "rate_dependence": ({"rate_dependence.rate_coefficient": 0.03}, {"rate_dependence.rate_coefficient": 0.004}),
+    "rear_axle_lift": ({"rear_axle_lift.rear_axle_stiffness": 225e3}, {"rear_axle_lift.rear_axle_stiffness": 10e3}),
+    "engine_impact": ({"engine_impact.engine_mass": 200.0, "engine_impact.gap": 0.35, "engine_impact.k_engine": 5e6,
+                       "engine_impact.k_rear": 1e6},
+                      {"engine_impact.engine_mass": 20.0, "engine_impact.gap": 0.02, "engine_impact.k_engine": 1e6,
+                       "engine_impact.k_rear": 2e5}),
+}
+
+
+@pytest.mark.parametrize("effect", sorted(PLAUSIBLE))
+def test_a_sound_fit_of_each_candidate_passes(a4, effect):
+    values, std = PLAUSIBLE[effect]
+    assert _plausible(effect, candidate_fit(values, std, engine_force_max=1e5), a4) == ""
+
+
+def changed(effect, **over):
+    values, std = PLAUSIBLE[effect]
+    values, std = dict(values), dict(std)
+    for k, (v, s) in over.items():
+        name = f"{effect}.{k}"
+        values[name], std[name] = v, s
+    return values, std
+
+
+@pytest.mark.parametrize("effect, over, words", [
+    ("front_wheel_block", {"depth": (0.598, 0.01)}, "is not reached"),
+    ("front_wheel_block", {"depth": (0.30, 0.15)}, "depth is not determined"),
+    ("front_wheel_block", {"depth": (0.30, math.inf)}, "not determined by the data"),
+    ("stiffness_zone", {"depth": (0.70, 0.01)}, "is not reached"),
+    ("stiffness_zone", {"k_zone": (1.2e6, 0.2e6)}, "does not differ from the base stiffness"),
+    ("progressive_stiffness", {"progression": (0.3, 0.2)}, "does not differ from 0"),
+    ("rate_dependence", {"rate_coefficient": (-0.03, 0.004)}, "not physical"),
+    ("rate_dependence", {"rate_coefficient": (0.006, 0.004)}, "does not differ from 0"),
+    ("rear_axle_lift", {"rear_axle_stiffness": (110e3, 10e3)}, "does not differ from the vehicle file"),
+])
+def test_an_implausible_fit_is_refused_with_its_reason(a4, neutral, effect, over, words):
+    values, std = changed(effect, **over)
+    if effect == "rear_axle_lift":  # 110 kN/m is within 3 sigma of the vehicle file's rear axle
+        assert abs(110e3 - neutral["rear_axle_lift.rear_axle_stiffness"]) < 3 * 10e3
+    assert words in _plausible(effect, candidate_fit(values, std, engine_force_max=1e5), a4)
+
+
+def test_a_candidate_whose_fit_ends_at_a_bound_is_not_a_discovery(a4):
+    values, std = PLAUSIBLE["rate_dependence"]
+    fr = candidate_fit(values, std)
+    fr.at_bound = {"rate_dependence.rate_coefficient": "at its upper bound 0.1 s/m"}
+    assert "the bound, not the recording" in _plausible("rate_dependence", fr, a4)
+
+
+def test_an_engine_that_never_reaches_the_barrier_is_not_an_engine_impact(a4):
+    values, std = PLAUSIBLE["engine_impact"]
+    assert "never reaches the barrier" in _plausible("engine_impact", candidate_fit(values, std, engine_force_max=0.0), a4)
+
+
+def test_a_fit_that_pulls_a_prior_beyond_three_sigma_is_refused(a4):
+    values, std = PLAUSIBLE["engine_impact"]
+    far = {"engine_impact.gap": (0.35 + 3.2 * 0.1, 0.1)}
+    near = {"engine_impact.gap": (0.35 + 2.8 * 0.1, 0.1)}
+    assert "beyond 3 sigma" in _plausible("engine_impact", candidate_fit(values, std, 0.6, 1e5, priors=far), a4)
+    assert _plausible("engine_impact", candidate_fit(values, std, 0.6, 1e5, priors=near), a4) == ""
+
+
+# ---------------------------------------------------------------- held-out prediction
+
+def test_held_out_chi2_counts_only_left_out_measured_samples_divided_by_tau():
+    n = 10
+    t = np.arange(n) * 0.01
+    x = np.arange(n, dtype=float) * 1e-3
+    m = Measurement(t=t, channels={"x_m": x, "v_mps": np.ones(n)}, sigma={"x_m": np.full(n, 1e-3), "v_mps": np.ones(n)},
+                    derived=("v_mps",))
+    m.sigma["x_m"][7] = np.nan  # not measured: never counted
+    pred = x - 2e-3  # every prediction off by 2 sigma: 4 per sample
+    fits = [types.SimpleNamespace(predictions={"x_m": pred, "v_mps": np.zeros(n)})] * 2
+    left = [np.arange(n) < 3, (np.arange(n) >= 6)]
+    folds = [(None, left[0]), (None, left[1])]
+    # fold 0 leaves out 3 samples, fold 1 four (6, 8, 9; 7 is unmeasured); the derived channel is skipped
+    assert _held_out_chi2(fits, folds, m, {"x_m": 2.0}) == pytest.approx(4 * (3 + 3) / 2.0)
+
+
+# ---------------------------------------------------------------- evidence: blocked front wheels
+
+def wheel_recording(angle_turn_rad, car_moves_m, with_angle=True, sigma=0.005, n=101, duration=0.1):
+    """A recording of ``duration`` s (one sample a millisecond by default) in which the body
+    moves ``car_moves_m`` and the measured front wheel angle turns ``angle_turn_rad`` (both
+    evenly); the front wheels blocked throughout."""
+    t = np.linspace(0.0, duration, n)
+    ch, sg = {"x_m": car_moves_m * t / duration}, {"x_m": np.full(n, 1e-3)}
+    if with_angle:
+        ch["front_wheel_angle_rad"], sg["front_wheel_angle_rad"] = angle_turn_rad * t / duration, np.full(n, sigma)
+    m = Measurement(t=t, channels=ch, sigma=sg)
+    traj = types.SimpleNamespace(t=t, front_blocked=np.ones(n), crush=np.linspace(0.0, 0.6, n),
+                                 engine_force=np.zeros(n))
+    return FakeFit(m, {"x_m": ch["x_m"]}, ("front_wheel_block.depth",), {"front_wheel_block.depth": 0.45},
+                   {"front_wheel_block.depth": 0.01}, {}, {}, traj, types.SimpleNamespace(k_compression=1e6))
+
+
+def test_wheels_seen_standing_while_the_car_moves_support_blocking(a4):
+    why, seen = front_wheels_blocked(wheel_recording(0.01, 0.20), a4, (0.0, 100.0))
+    assert why == "" and seen.startswith("seen:")
+
+
+def test_wheels_seen_turning_refute_blocking(a4):
+    rolling = 0.20 / float(a4.wheel_radius)
+    why, _ = front_wheels_blocked(wheel_recording(0.8 * rolling, 0.20), a4, (0.0, 100.0))
+    assert "shows the front wheels turning" in why
+    # and discovery's plausibility check applies it
+    assert "shows the front wheels turning" in _plausible("front_wheel_block", wheel_recording(0.8 * rolling, 0.20), a4)
+    assert _plausible("front_wheel_block", wheel_recording(0.01, 0.20), a4) == ""
+
+
+def test_blocking_while_the_car_stands_still_is_not_a_finding(a4):
+    """Rolling would turn the wheels 0.003 rad over 1 mm of travel, in 101 samples of
+    sigma 0.005 rad: a chi2 difference of about 4, below the 9 that would decide."""
+    why, _ = front_wheels_blocked(wheel_recording(0.0, 0.001), a4, (0.0, 100.0))
+    assert "no channel can check it" in why
+
+
+def test_without_a_wheel_channel_blocking_is_inferred_not_seen(a4):
+    why, seen = front_wheels_blocked(wheel_recording(0.0, 0.20, with_angle=False), a4, (0.0, 100.0))
+    assert why == "" and seen.startswith("inferred, not seen")
+
+
+def test_only_the_blocked_window_is_judged(a4):
+    """Wheels that turn before and after the window but stand inside it support blocking; the
+    window's own samples decide, not the whole record's."""
+    fr = wheel_recording(0.0, 0.30, n=301, duration=0.3)  # 0-300 ms, the body moves 0.3 m evenly
+    t = fr.measurement.t
+    rolling = fr.predictions["x_m"] / float(a4.wheel_radius)
+    stands = (t >= 0.1) & (t <= 0.2)
+    angle = np.where(t < 0.1, rolling, np.where(stands, rolling[np.argmax(t >= 0.1)], rolling - (rolling[200] - rolling[100])))
+    fr.measurement.channels["front_wheel_angle_rad"][:] = angle
+    why, seen = front_wheels_blocked(fr, a4, (100.0, 200.0))
+    assert why == "" and seen.startswith("seen:") and "100-200 ms" in seen
+    why, seen = front_wheels_blocked(fr, a4, (0.0, 300.0))
+    assert "shows the front wheels turning in 0-300 ms" in why and seen == ""
+
+
+def test_five_millimetres_of_travel_decide_at_this_noise(a4):
+    """5 mm over 101 samples of sigma 0.005 rad: rolling would turn the wheels 0.016 rad, a
+    chi2 difference of about 85 against standing: decidable. 1.3 mm gives about 6: not."""
+    why, seen = front_wheels_blocked(wheel_recording(0.0, 0.005), a4, (0.0, 100.0))
+    assert why == "" and seen.startswith("seen:")
+    why, seen = front_wheels_blocked(wheel_recording(0.0, 0.0013), a4, (0.0, 100.0))
+    assert "no channel can check it" in why and "0-100 ms" in why and seen == ""

@@ -1,0 +1,53 @@
+"""The axles against the numbers of the vehicle file and statics worked on paper: at rest the
+axles carry the car's weight split by its CG position (m g b / L front, m g a / L rear) and
+hold it still; a heave of dz changes each axle's force by -k dz and a heave rate of dz/dt by
+-c dz/dt, with the vehicle file's k and c; a nose-down pitch loads the front axle and unloads
+the rear. (The smoothing of the unilateral contact is 20 N wide: negligible at these loads.)"""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from sim import Solver, named_params
+from sim.ground import ground_forces
+from sim.vehicle import GRAVITY
+
+PARAMS = named_params("paper_identified")
+
+
+def axles(a4, q, v):
+    force, normal, margin, _, _ = ground_forces(jnp.asarray(q, dtype=float), jnp.asarray(v, dtype=float), a4, PARAMS,
+                                                jnp.asarray(0.0), Solver())
+    return np.asarray(force), np.asarray(normal)
+
+
+def test_at_rest_the_axles_carry_the_weight_split_by_the_cg_and_hold_the_car_still(a4):
+    force, normal = axles(a4, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    m, a, length = float(a4.mass), float(a4.cg_to_front_axle), float(a4.wheelbase)
+    w = m * GRAVITY
+    assert normal == pytest.approx([w * (length - a) / length, w * a / length], rel=1e-4)
+    assert abs(force[1]) < 1e-3 * w and abs(force[2]) < 1e-3 * w * length  # no net heave force, no pitch moment
+
+
+def test_heave_changes_each_axle_force_by_k_times_the_rise(a4):
+    _, rest = axles(a4, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    _, up = axles(a4, [0.0, 0.01, 0.0], [0.0, 0.0, 0.0])
+    assert rest - up == pytest.approx(0.01 * np.asarray(a4.axle_stiffness), rel=1e-3)
+
+
+def test_heave_rate_changes_each_axle_force_by_c_times_the_rate(a4):
+    _, rest = axles(a4, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    _, rising = axles(a4, [0.0, 0.0, 0.0], [0.0, 0.1, 0.0])
+    assert rest - rising == pytest.approx(0.1 * np.asarray(a4.axle_damping), rel=1e-3)
+
+
+def test_a_nose_down_pitch_loads_the_front_axle_and_unloads_the_rear(a4):
+    _, rest = axles(a4, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    moment, pitched = axles(a4, [0.0, 0.0, 0.01], [0.0, 0.0, 0.0])  # 0.01 rad nose down
+    a, b = float(a4.cg_to_front_axle), float(a4.cg_to_rear_axle)
+    k = np.asarray(a4.axle_stiffness)
+    # the front axle point drops by about a * 0.01 m, the rear rises by b * 0.01 m
+    assert pitched - rest == pytest.approx([k[0] * a * 0.01, -k[1] * b * 0.01], rel=0.05)
+    # and the springs pitch it back, nose up: -(k_f a^2 + k_r b^2) * 0.01 (the weight's lever,
+    # the axle loads times (h - r) * 0.01, is a few per cent of it)
+    assert moment[2] == pytest.approx(-(k[0] * a**2 + k[1] * b**2) * 0.01, rel=0.1)
