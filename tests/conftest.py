@@ -64,3 +64,19 @@ def motion(test10146):
 
     return measurement_from_test(test10146)
 
+
+@pytest.fixture()
+def figures(monkeypatch):
+    """Every matplotlib figure saved during the test, in order (still written to disk): plots
+    are checked for what they show, not for their file size."""
+    import matplotlib.figure
+
+    saved = []
+    original = matplotlib.figure.Figure.savefig
+
+    def savefig(self, *args, **kwargs):
+        saved.append(self)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
+    return saved

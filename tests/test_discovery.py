@@ -111,10 +111,21 @@ def test_result_entries_follow_the_interface_and_are_json(block_case):
             assert {"value", "unit", "std"} <= set(entry)
 
 
-def test_plots_are_written(tmp_path, a4, unexplained_case):
+def test_plots_show_the_window_and_the_unexplained_force(tmp_path, a4, unexplained_case, figures):
     _, result = unexplained_case
     names = plot_discovery(result, tmp_path, a4)
     assert names == ["discovery_residuals.png", "discovery_force_deflection.png"]
-    for name in names:
-        data = (tmp_path / name).read_bytes()
-        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+    assert all((tmp_path / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for n in names)
+    residuals, force = figures
+    panels = [ax for ax in residuals.axes if ax.get_ylabel()]
+    assert len(panels) == len(result.final.measurement.channels) - len(result.final.measurement.derived)
+    assert all("(" in ax.get_ylabel() and ")" in ax.get_ylabel() for ax in panels)  # each with its unit
+    # the unexplained window is named above the top panel, and the before/after fits are both drawn
+    assert "unexplained" in [t.get_text() for t in panels[0].texts]
+    labels = [t.get_text() for t in panels[0].get_legend().get_texts()]
+    assert "measurement +-2 sigma" in labels and len([s for s in labels if "RMS" in s]) == 2
+    crush_ax, time_ax = force.axes[:2]
+    assert (crush_ax.get_xlabel(), crush_ax.get_ylabel()) == ("crush (m)", "barrier force (kN)")
+    assert "implied by the recording (-m a)" in [t.get_text() for t in crush_ax.get_legend().get_texts()]
+    assert time_ax.get_xlabel() == "time after first contact (ms)"
+    assert {"unexplained force (towards the barrier > 0)", "+-2 sigma"} <= {t.get_text() for t in time_ax.get_legend().get_texts()}

@@ -304,3 +304,50 @@ def test_five_millimetres_of_travel_decide_at_this_noise(a4):
     assert why == "" and seen.startswith("seen:")
     why, seen = front_wheels_blocked(wheel_recording(0.0, 0.0013), a4, (0.0, 100.0))
     assert "no channel can check it" in why and "0-100 ms" in why and seen == ""
+
+
+def test_score_leaves_every_trial_undecided_with_its_tau_scaled_chi2():
+    m = measurement()
+    current = fit_with_residual(m, 0.004)
+    values = {"stiffness_zone.depth": 0.4, "stiffness_zone.k_zone": 2e6}
+    zone = fit_with_residual(m, 0.0015, names=("k_compression", "z.depth", "z.k"), values=values)
+    (tr,) = score({"stiffness_zone": zone}, current, {"x_m": 2.0})
+    assert tr.chi2 == pytest.approx(200 * 1.5**2 / 2.0) and not tr.accepted and tr.reason == "" and tr.cv_gain is None
+
+
+@pytest.mark.parametrize("effect, over", [
+    ("rear_axle_lift", {"rear_axle_stiffness": (125e3, 10e3)}),  # 3.5 sigma from the vehicle file's 90 kN/m
+    ("progressive_stiffness", {"progression": (0.5, 0.2)}),  # 2.5 sigma from 0
+    ("rate_dependence", {"rate_coefficient": (0.0101, 0.004)}),  # 2.5 sigma from 0
+])
+def test_a_fit_just_beyond_each_threshold_passes(a4, neutral, effect, over):
+    values, std = changed(effect, **over)
+    if effect == "rear_axle_lift":
+        assert 3 * 10e3 < abs(125e3 - neutral["rear_axle_lift.rear_axle_stiffness"]) < 4 * 10e3
+    assert _plausible(effect, candidate_fit(values, std, engine_force_max=1e5), a4) == ""
+
+
+def test_an_engine_touching_the_barrier_at_all_reaches_it(a4):
+    values, std = PLAUSIBLE["engine_impact"]
+    assert _plausible("engine_impact", candidate_fit(values, std, engine_force_max=0.5), a4) == ""
+
+
+def test_a_zone_is_judged_against_the_fitted_base_stiffness(a4):
+    """When the fit frees k_compression, the zone must differ from the fitted value, not from
+    the template's."""
+    values, std = changed("stiffness_zone")
+    values["k_compression"], std["k_compression"] = 2.45e6, 0.1e6
+    fr = candidate_fit(values, std, engine_force_max=1e5, k_compression=1.0e6)
+    assert "does not differ from the base stiffness" in _plausible("stiffness_zone", fr, a4)
+
+
+def test_the_window_of_blocked_wheels_is_on_the_recording_clock(a4):
+    """The model's clock starts at contact, the recording's contact_time (s) later; the window
+    is clipped to the recording."""
+    from identify.discovery import effect_window_ms
+
+    fr = wheel_recording(0.0, 0.2, n=101)  # recording 0-100 ms
+    fr.contact_time = 0.004
+    t_model = np.arange(0.0, 0.12, 0.001)
+    fr.trajectory = types.SimpleNamespace(t=t_model, front_blocked=((t_model >= 0.030) & (t_model <= 0.110)).astype(float))
+    assert effect_window_ms(fr, "front_wheel_block") == (34.0, 100.0)

@@ -4,26 +4,11 @@ band."""
 
 from types import SimpleNamespace
 
-import matplotlib.figure
 import numpy as np
 import pytest
 
 from helpers import synthetic_measurement
 from sim import named_params
-
-
-@pytest.fixture()
-def figures(monkeypatch):
-    """Every figure saved during the test, in order (still written to disk)."""
-    saved = []
-    original = matplotlib.figure.Figure.savefig
-
-    def savefig(self, *args, **kwargs):
-        saved.append(self)
-        return original(self, *args, **kwargs)
-
-    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
-    return saved
 
 
 @pytest.fixture(scope="module")

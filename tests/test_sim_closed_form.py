@@ -42,3 +42,4 @@ def test_compression_lasts_a_quarter_period(point_mass_run):
 def test_no_pitch_without_a_moment(point_mass_run):
     _, traj, _ = point_mass_run
     assert float(abs(traj.pitch).max()) < 1e-6
+
