@@ -18,7 +18,7 @@ The loop (one round per effect):
    compiled solve (a superset model with every mechanism, unused ones held at values that
    switch them off);
 3. the best candidate by the Bayesian information criterion BIC = chi2 + k ln n (chi2 and
-   n divided by each channel's noise autocorrelation time, so that correlated tracking
+   n divided by each channel's residual autocorrelation time, so that correlated tracking
    errors do not count as independent evidence; one time per channel for the whole round
    (:func:`round_tau`), so every candidate is scored alike: :func:`choose` decides) is
    accepted only when it lowers the BIC by at
@@ -223,9 +223,12 @@ def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
     return out
 
 
-def bic(fr: FitResult, tau: dict[str, float]) -> float:
-    """chi2 + k ln n, with each channel's chi2 and sample count divided by its tau."""
+def bic(fr: FitResult, tau: dict[str, float], channels=None) -> float:
+    """chi2 + k ln n, with each channel's chi2 and sample count divided by its tau; over
+    ``channels`` only when given (default: every fitted channel)."""
     chi2 = channel_chi2(fr, tau)
+    if channels is not None:
+        chi2 = {c: chi2[c] for c in channels}
     m = fr.measurement
     n = sum(int(m.valid(c).sum()) / tau.get(c, 1.0) for c in chi2)
     return float(sum(chi2.values()) + len(fr.names) * math.log(max(n, 2.0)))

@@ -457,7 +457,7 @@ def fit(
     )
     result.identified = assess_identifiability(result, channels)
     # no silent bounds: a value the bound stopped is not a value the data gave
-    result.at_bound = {p.name: p.at_bound(result.values[p.name]) for p in free if p.at_bound(result.values[p.name])}
+    result.at_bound = {p.name: where for p in free if (where := p.at_bound(result.values[p.name]))}
     for name, why in result.at_bound.items():
         ok, reason = result.identified.get(name, (True, ""))
         result.identified[name] = (False, f"{reason}; it ended {why}" if not ok else

@@ -7,7 +7,6 @@ The flow: recording (``identify.recording``) -> Measurement -> fit (``identify.f
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 
 import numpy as np
@@ -137,12 +136,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         "speed_mps": fr.speed,
         "contact_time_ms": fr.contact_time * 1e3,
         "parameters": params,
-        "nuisance": {
-            n: {"value": fr.values[n], "unit": fr.units[n], "std": fr.std[n],
-                **({"identified": False, "reason": fr.identified[n][1]} if not fr.identified.get(n, (True,))[0] else {})}
-            for n in ("impact_speed", "contact_time")
-            if n in fr.values
-        },
+        "nuisance": {n: _nuisance_entry(fr, n) for n in ("impact_speed", "contact_time") if n in fr.values},
         "covariance": {"names": list(fr.names), "matrix": fr.covariance},
         "correlation": {"names": list(fr.names), "matrix": fr.correlation},
         "fit": {
@@ -178,6 +172,16 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
 # a parameter with a prior counts as identified when the fit's std is below this share of the
 # prior's: the recording, not the prior, decides its value
 PRIOR_NARROWING = 0.5
+
+
+def _nuisance_entry(fr: FitResult, name: str) -> dict:
+    """result.json's entry of a nuisance parameter; marked not identified with the reason
+    when the fit says so (a contact time stopped by its bound)."""
+    entry = {"value": fr.values[name], "unit": fr.units[name], "std": fr.std[name]}
+    ok, reason = fr.identified.get(name, (True, ""))
+    if not ok:
+        entry.update(identified=False, reason=reason)
+    return entry
 
 
 def _unit(name):
@@ -413,18 +417,17 @@ def second_body_warning(fr, one_body) -> str:
     one-body fit to the cabin alone (BIC on those channels, one autocorrelation time per
     channel for both, the engine's parameters counted); else a warning giving both values of
     k_compression. On ISO-MME reference worlds without an engine impact the two-body fit
-    put k_compression 20-33 % low while the one-body fit of the cabin was right: a second
+    put k_compression 25-33 % low while the one-body fit of the cabin was right: a second
     body the cabin's motion does not bear out must not decide the structure's stiffness
     silently."""
-    from identify.discovery import round_tau
+    from identify.discovery import bic, round_tau
     from identify.residuals import channel_chi2
 
     if one_body is None or "engine_vx_mps" not in fr.predictions:
         return ""
     tau = round_tau([one_body, fr])
     cabin = list(channel_chi2(one_body, tau))
-    n = sum(int(one_body.measurement.valid(c).sum()) / tau.get(c, 1.0) for c in cabin)
-    scores = [sum(channel_chi2(f, tau)[c] for c in cabin) + len(f.names) * math.log(max(n, 2.0)) for f in (one_body, fr)]
+    scores = [bic(f, tau, channels=cabin) for f in (one_body, fr)]
     if scores[1] <= scores[0] - SECOND_BODY_BIC_GAIN:
         return ""
     k1, k2 = one_body.values.get("k_compression"), fr.values.get("k_compression")
