@@ -99,6 +99,7 @@ def plot_histories(run_a, run_b, labels, path, title="") -> None:
     ax_x.set(xlabel="t [ms]", ylabel="displacement X [m]", title="(a) displacement")
     ax_v.set(xlabel="t [ms]", ylabel="velocity V [m/s]", title="(b) velocity")
     ax_x.legend(loc="lower right", fontsize=8)
+    ax_v.legend(loc="upper right", fontsize=8)
     twin.legend(loc="center right", fontsize=8)
     ax_v.axhline(0.0, color="k", lw=0.5)
     for ax in (ax_x, ax_v):
@@ -129,21 +130,23 @@ def plot_silhouettes(vehicle, run_a, run_b, labels, path, times=SILHOUETTE_TIMES
     for ax in axes.ravel()[len(times):]:
         ax.axis("off")
     for ax, s, letter in zip(axes.ravel(), times, "abcdefghijkl"):
-        ax.add_patch(Rectangle((length, -0.1), 0.4, height + 0.6, color="0.75", hatch="//", zorder=3))
+        ax.add_patch(Rectangle((length, -0.1), 0.4, height + 0.6, color="0.75", hatch="//", zorder=3, label="barrier"))
         for run, label, colour in zip((run_a, run_b), labels, COLOURS):
             x, z, pitch = (float(np.interp(s, t, np.asarray(getattr(run, a)))) for a in ("x", "z", "pitch"))
             ax.add_patch(Polygon(body_outline(vehicle, x, z, pitch), closed=True, fill=False, ec=colour, lw=1.2,
                                  label=label))  # fmt: skip
             if vehicle.windscreen_top is not None:
                 roof = _pose(np.asarray([vehicle.windscreen_top]), x_cg, float(vehicle.cg_height), x, z, pitch)
-                ax.plot(roof[:, 0], roof[:, 1], "o", color=colour, ms=3)
+                ax.plot(roof[:, 0], roof[:, 1], "o", color=colour, ms=3, label=f"{label}: top of the windscreen")
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set_xlim(-0.3, length + 0.5)
         ax.set_ylim(-0.1, height + 0.5)
         ax.set_aspect("equal")
         ax.set_title(f"({letter}) t = {s * 1e3:.0f} ms", fontsize=9)
+        ax.set_xlabel("X (m)", fontsize=7)
+        ax.set_ylabel("Z (m)", fontsize=7)
         ax.tick_params(labelsize=7)
-    axes.ravel()[0].legend(loc="upper left", fontsize=7)
+    axes.ravel()[0].legend(loc="upper left", fontsize=6)
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()

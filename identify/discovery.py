@@ -359,7 +359,7 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     for p in BY_EFFECT[effect].parameters:
         value, sd = fr.values[p.name], fr.std[p.name]
         if fr.at_bound.get(p.name):
-            return f"{p.name} ended {fr.at_bound[p.name]}: the bound, not the recording, set it"
+            return f"{p.name} ended {fr.at_bound[p.name]}: the fit's range, not the recording, set it"
         if not np.isfinite(sd):
             return f"{p.name} is not determined by the data"
         if p.name.endswith(".depth") and value > crush_max - 0.005:

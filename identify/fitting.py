@@ -24,6 +24,7 @@ import optimistix as optx
 
 from identify.errors import UserError
 from identify.measurement import Measurement
+from identify.least_squares import channel_residuals, parameter_covariance, prior_residuals, weighted_offset
 from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
@@ -38,6 +39,7 @@ NOT_IDENTIFIED = {
     "restitution": ("absolute", 0.05),
     "dz_contact": ("absolute", 0.10),
 }
+LOG_SCALE_NOT_IDENTIFIED = 0.2  # relative std beyond which any other log-scale parameter is not identified
 
 # Random starting points are drawn from these physical ranges (log-uniform for "log").
 START_RANGES = {
@@ -196,38 +198,14 @@ def _residual_fn(spec, channels, n_out, solver):
 
     def residuals(u, data):
         _, preds, speed = model_on_clock(_values(spec, u, data), data, channels, n_out, solver)
-        out = []
-        for c, (name, pred) in enumerate(zip(channels, preds)):
-            w = data["w"][c]
-            diff = pred - data["y"][c]
-            if name in OFFSET_FREE:
-                diff = diff - jnp.sum(w * w * diff) / jnp.maximum(jnp.sum(w * w), 1e-300)
-            out.append(w * diff)
-        out.append(jnp.atleast_1d((speed - data["speed_prior"]) * data["speed_prior_w"]))
+        out = [channel_residuals(pred, data["y"][c], data["w"][c], name in OFFSET_FREE)
+               for c, (name, pred) in enumerate(zip(channels, preds))]
+        out.append(jnp.atleast_1d(prior_residuals(speed, data["speed_prior"], data["speed_prior_w"])))
         values = _values(spec, u, data)
-        out.append(jnp.stack([(values[p.name] - data["prior_mu"][i]) * data["prior_w"][i] for i, p in enumerate(spec)]))
+        out.append(prior_residuals(jnp.stack([values[p.name] for p in spec]), data["prior_mu"], data["prior_w"]))
         return jnp.concatenate(out)
 
     return residuals
-
-
-def integrated_autocorrelation_time(residual: np.ndarray, max_lag: int = 50) -> float:
-    """tau = 1 + 2 * sum of the residual's autocorrelations, summed over lags while the
-    sums of neighbouring pairs stay positive (Geyer's initial positive sequence); 1 for
-    white noise, larger when neighbouring samples' errors are alike. Never below 1."""
-    r = np.asarray(residual, float)
-    r = r - r.mean()
-    n, var = len(r), float(r @ r)
-    if n < 10 or var <= 0:
-        return 1.0
-    rho = [float(r[:-k] @ r[k:]) / var for k in range(1, min(max_lag, n // 4) + 1)]
-    total = 0.0
-    for k in range(0, len(rho) - 1, 2):
-        pair = rho[k] + rho[k + 1]
-        if pair <= 0:
-            break
-        total += pair
-    return max(1.0, 1.0 + 2.0 * total)
 
 
 def _solve(spec, channels, n_out, options, data, u0):
@@ -385,28 +363,9 @@ def fit(
     jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
     spec_all, free = free, tuple(free[i] for i in fitted)
     n_res = int(np.sum(w > 0)) + (1 if measured_prior else 0) + int(np.count_nonzero(np.asarray(data["prior_w"])))
-    chi2 = float(r @ r)
-    dof = max(n_res - len(free), 1)
-    scale = max(1.0, chi2 / dof)
-    # Covariance in physical units: J / (dvalue/du) by the chain rule (the transforms are
-    # increasing), columns scaled to each parameter's typical magnitude so that the
-    # inversion is well conditioned. A direction the data do not constrain (eigenvalue ~ 0)
-    # gets a huge variance, not the zero a pseudo-inverse would give it; and a parameter
-    # pushed to the flat end of its transform keeps the variance the data give it.
     n = len(measurement.t)
-    tau = {name: integrated_autocorrelation_time(r[c * n:(c + 1) * n][w[c] > 0]) for c, name in enumerate(channels)}
-    row_weight = np.ones(len(r))
-    for c, name in enumerate(channels):
-        row_weight[c * n:(c + 1) * n] = 1.0 / math.sqrt(tau[name])
-    typical = np.array([p.typical for p in free])
-    jac_s = row_weight[:, None] * jac_u / np.maximum(dvalue_du, 1e-300)[None, :] * typical[None, :]
-    eigval, eigvec = np.linalg.eigh(jac_s.T @ jac_s)
-    eigval = np.maximum(eigval, 1e-14 * max(float(eigval.max()), 1e-300))
-    cov = (eigvec / eigval) @ eigvec.T * scale * np.outer(typical, typical)
-    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(std, std)
-    corr = np.nan_to_num(corr)
+    rows = {name: c * n + np.flatnonzero(w[c] > 0) for c, name in enumerate(channels)}
+    unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), rows, n_res)
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}
@@ -416,8 +375,7 @@ def fit(
     for c, name in enumerate(channels):
         pred, valid = preds[c], w[c] > 0
         if name in OFFSET_FREE:
-            ww = w[c] ** 2
-            pred = pred - np.sum(ww * (pred - y[c])) / np.sum(ww)
+            pred = pred - float(weighted_offset(pred - y[c], w[c]))
         predictions[name] = pred
         rms[name] = float(np.sqrt(np.mean((pred - y[c])[valid] ** 2)))
 
@@ -434,13 +392,13 @@ def fit(
         names=names,
         units={p.name: p.unit for p in free},
         values=values,
-        std=dict(zip(names, map(float, std))),
-        covariance=cov,
-        correlation=corr,
+        std=dict(zip(names, map(float, unc.std))),
+        covariance=unc.cov,
+        correlation=unc.corr,
         identified={},
         rms=rms,
-        chi2=chi2,
-        dof=dof,
+        chi2=unc.chi2,
+        dof=unc.dof,
         converged=bool(ok[best]),
         starts=len(costs),
         starts_at_best=at_best,
@@ -452,10 +410,11 @@ def fit(
         predictions=predictions,
         measurement=measurement,
         model=model,
-        correlation_time=tau,
+        correlation_time=unc.tau,
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
     )
-    result.identified = assess_identifiability(result, channels)
+    result.identified = {**assess_identifiability(result, channels),
+                         **log_scale_identifiability(free, result.values, result.std)}
     # no silent bounds: a value the bound stopped is not a value the data gave
     result.at_bound = {p.name: where for p in free if (where := p.at_bound(result.values[p.name]))}
     for name, why in result.at_bound.items():
@@ -468,6 +427,20 @@ def fit(
             f" {options.max_steps} steps); check the vehicle, the speed and the tracks"
         )
     return result
+
+
+def log_scale_identifiability(free, values: dict, std: dict) -> dict[str, tuple[bool, str]]:
+    """name -> (False, reason) for each log-scale parameter other than the collision
+    parameters (a mechanism's stiffness, an engine's stiffnesses) whose standard deviation
+    exceeds ``LOG_SCALE_NOT_IDENTIFIED`` of its value: held to the standard of k_compression."""
+    out = {}
+    for p in free:
+        if p.transform == "log" and p.name not in NOT_IDENTIFIED and values[p.name] > 0:
+            rel = std[p.name] / values[p.name]
+            if not rel <= LOG_SCALE_NOT_IDENTIFIED:  # NaN too
+                out[p.name] = (False, f"not identified (std {100 * rel:.0f} %): the recorded motion barely changes"
+                                      " when it changes")
+    return out
 
 
 def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool, str]]:

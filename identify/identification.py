@@ -7,6 +7,7 @@ The flow: recording (``identify.recording``) -> Measurement -> fit (``identify.f
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import numpy as np
@@ -371,6 +372,10 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
             fr = fit_measurement(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
         one_body = _one_body_reference(rec, veh, free, options, speed_mps, say)
         discoveries, status = [], "discovery of missing physics was switched off (--no-discover)"
+    engine_doubt, disputed = second_body_doubts(fr, one_body)
+    for name, reason in disputed.items():  # the data do not decide between the two models there
+        ok, before = fr.identified.get(name, (True, ""))
+        fr.identified[name] = (False, reason if ok else f"{before}; and {reason.removeprefix('not identified: ')}")
     doc = result_document(fr, rec, veh, discoveries=discoveries, discovery_status=status, held=held,
                           vehicle_ref=vehicle_reference(vehicle))
     if found is not None:  # every candidate tried, round by round, and why it was not accepted
@@ -378,12 +383,11 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         # the multi-start search is the base model's; discovery refines from its best fit
         doc["fit"]["starts"], doc["fit"]["starts_at_best"] = base.starts, base.starts_at_best
         doc["fit"]["starts_of"] = "base model"
-    engine_doubt = second_body_warning(fr, one_body)
     if engine_doubt:
         warnings.append(engine_doubt)
     for name, where in fr.at_bound.items():
-        warnings.append(f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the bound,"
-                        " not the recording, set it (the model may be trading it against what it cannot explain)")
+        warnings.append(f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the fit's"
+                        " range, not the recording, set it (the model may be trading it against what it cannot explain)")
     for name, p in doc["priors"].items():
         if p["conflict"]:
             warnings.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"
@@ -410,32 +414,47 @@ def _second_body_notes(fr, recording) -> list[str]:
 
 
 SECOND_BODY_BIC_GAIN = 10.0  # the cabin's BIC must fall this much for the second body to be borne out
+MODEL_DISAGREEMENT = 2.0  # standard deviations (both fits' combined) beyond which a parameter depends on the model
 
 
-def second_body_warning(fr, one_body) -> str:
-    """'' when the two-body fit ``fr`` explains the cabin's own channels better than the
+def second_body_doubts(fr, one_body) -> tuple[str, dict[str, str]]:
+    """('', {}) when the two-body fit ``fr`` explains the cabin's own channels better than the
     one-body fit to the cabin alone (BIC on those channels, one autocorrelation time per
-    channel for both, the engine's parameters counted); else a warning giving both values of
-    k_compression. On ISO-MME reference worlds without an engine impact the two-body fit
-    put k_compression 25-33 % low while the one-body fit of the cabin was right: a second
-    body the cabin's motion does not bear out must not decide the structure's stiffness
-    silently."""
+    channel for both, the engine's parameters counted). Else a warning giving both values of
+    k_compression, and {collision parameter: reason} for each parameter on which the two
+    fits disagree by more than MODEL_DISAGREEMENT combined standard deviations: those depend
+    on which model is right, which the recording does not decide, so they are not identified.
+
+    On ISO-MME reference worlds without an engine impact the two-body fit put k_compression
+    25-33 % low (z -2 to -4) while the one-body fit of the cabin was right: a second body the
+    cabin's motion does not bear out must not decide the structure's stiffness."""
     from identify.discovery import bic, round_tau
     from identify.residuals import channel_chi2
 
     if one_body is None or "engine_vx_mps" not in fr.predictions:
-        return ""
+        return "", {}
     tau = round_tau([one_body, fr])
     cabin = list(channel_chi2(one_body, tau))
     scores = [bic(f, tau, channels=cabin) for f in (one_body, fr)]
     if scores[1] <= scores[0] - SECOND_BODY_BIC_GAIN:
-        return ""
+        return "", {}
     k1, k2 = one_body.values.get("k_compression"), fr.values.get("k_compression")
     engine_rms = fr.rms.get("engine_vx_mps", float("nan"))
-    return (f"the engine fitted as a second body does not explain the cabin's motion better than one body does "
-            f"(cabin BIC {scores[1]:.0f} against {scores[0]:.0f}; the engine's velocity misses by {engine_rms:.2f} m/s "
-            f"RMS): the structure's stiffness depends on which model is right, k_compression {k2:.4g} N/m^3 with two "
-            f"bodies, {k1:.4g} +- {one_body.std.get('k_compression', float('nan')):.2g} N/m^3 with the cabin alone")
+    warning = (f"the engine fitted as a second body does not explain the cabin's motion better than one body does "
+               f"(cabin BIC {scores[1]:.0f} against {scores[0]:.0f}; the engine's velocity misses by {engine_rms:.2f} m/s "
+               f"RMS): the structure's stiffness depends on which model is right, k_compression {k2:.4g} N/m^3 with two "
+               f"bodies, {k1:.4g} +- {one_body.std.get('k_compression', float('nan')):.2g} N/m^3 with the cabin alone")
+    disputed = {}
+    for name in COLLISION_PARAMETERS:
+        if name not in fr.values or name not in one_body.values:
+            continue
+        v2, v1 = fr.values[name], one_body.values[name]
+        s = math.hypot(fr.std.get(name, math.nan), one_body.std.get(name, math.nan))
+        if math.isfinite(s) and abs(v2 - v1) > MODEL_DISAGREEMENT * s:
+            disputed[name] = (f"not identified: it depends on the model, not on the recording ({v2:.4g} with the engine"
+                              f" as a second body, {v1:.4g} +- {one_body.std[name]:.2g} with the cabin alone,"
+                              f" {abs(v2 - v1) / s:.1f} sigma apart; the cabin's motion does not bear out the second body)")
+    return warning, disputed
 
 
 def _one_body_reference(rec, veh, free, options, speed_mps, say):

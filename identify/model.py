@@ -62,11 +62,20 @@ class FreeParameter:
         return self.centre + self.scale * u
 
     AT_BOUND = 0.01  # within this share of its range of a bound, a value is "at its bound"
+    RUNAWAY = 1e3  # a log-transformed value this many times its scale (or 1/this) has run away
 
     def at_bound(self, value: float) -> str:
         """'' when ``value`` lies inside its transform's range, else which bound it sits at
         (within ``AT_BOUND`` of the range): a fit that ends there was stopped by the bound,
-        not by the data. ``log`` and ``linear`` transforms have no bound."""
+        not by the data. A ``log`` transform has no bound, but a value ``RUNAWAY`` times its
+        scale or less than 1/``RUNAWAY`` of it has run off towards one (on a reference
+        world an engine's rear stiffness reached 9.7e12 N/m, 1e7 times its scale); a
+        ``linear`` one has none."""
+        if self.transform == "log":
+            ratio = float(value) / self.scale
+            if ratio >= self.RUNAWAY or ratio <= 1.0 / self.RUNAWAY:
+                return f"far outside any plausible value ({float(value):.3g} {self.unit}, {ratio:.2g} times its scale)"
+            return ""
         if self.transform == "logit":
             lo, hi = self.lower, self.upper
         elif self.transform == "tanh":

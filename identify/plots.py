@@ -42,12 +42,14 @@ def plot_displacement_velocity(result, default_traj, path: Path) -> Path:
     m = result.measurement
     tr = result.trajectory
     t_model = (np.asarray(tr.t) + result.contact_time) * 1e3
+    # the default run starts at its own contact: put it on the recording's clock as the fit is
+    t_default = (np.asarray(default_traj.t) + result.contact_time) * 1e3 if default_traj is not None else None
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
     if "x_m" in m.channels:
         ax1.plot(m.t * 1e3, m.channels["x_m"], ".", ms=2, color="0.3", label="measured")
         ax1.plot(m.t * 1e3, result.predictions["x_m"], color="tab:blue", lw=2, label=f"fitted ({result.model})")
     if default_traj is not None:
-        ax1.plot(np.asarray(default_traj.t) * 1e3, np.asarray(default_traj.x), "--", color="tab:red",
+        ax1.plot(t_default, np.asarray(default_traj.x), "--", color="tab:red",
                  label="V-SIM default parameters")  # fmt: skip
     ax1.set_ylabel("displacement x (m)")
     ax1.legend(loc="lower right")
@@ -57,9 +59,9 @@ def plot_displacement_velocity(result, default_traj, path: Path) -> Path:
     elif "x_m" in m.channels:
         v = _measured_velocity(m.t, m.channels["x_m"], m.sigma["x_m"])
         ax2.plot(m.t * 1e3, v, color="0.3", lw=1, label="measured (CFC 180 derivative of x)")
-    ax2.plot(t_model, np.asarray(tr.vx), color="tab:blue", lw=2, label="fitted")
+    ax2.plot(t_model, np.asarray(tr.vx), color="tab:blue", lw=2, label=f"fitted ({result.model})")
     if default_traj is not None:
-        ax2.plot(np.asarray(default_traj.t) * 1e3, np.asarray(default_traj.vx), "--", color="tab:red",
+        ax2.plot(t_default, np.asarray(default_traj.vx), "--", color="tab:red",
                  label="V-SIM default parameters")  # fmt: skip
     ax2.set_ylabel("velocity v (m/s)")
     ax2.set_xlabel("time since first contact (ms)")
@@ -90,7 +92,7 @@ def plot_residuals(result, path: Path, windows=(), before=None, title: str = "")
         for fit, colour in ((before, "tab:red"), (result, "tab:blue")):
             if fit is not None:
                 res = (m.channels[name] - fit.predictions[name]) * scale
-                ax.plot(m.t[ok] * 1e3, res[ok], lw=0.8, color=colour, label=f"{fit.model}: RMS {fit.rms[name] * scale:.3g}")
+                ax.plot(m.t[ok] * 1e3, res[ok], lw=0.8, color=colour, label=f"{fit.model}: RMS {fit.rms[name] * scale:.3g} {unit}")
         ax.set_ylabel(f"{label} ({unit})")
         ax.set_title(f"{label}: RMS {result.rms[name] * scale:.3g} {unit}", fontsize=9, loc="left")
         for k, (_, t0, t1) in enumerate(windows):
@@ -142,7 +144,7 @@ def plot_silhouettes(result, vehicle, default_traj, path: Path, times_ms=(0, 50,
             meas = outline_at(vehicle, m.channels["x_m"][i], m.channels["z_m"][i], m.channels["pitch_rad"][i])
             ax.plot(*np.vstack([meas, meas[:1]]).T, color="k", lw=1, label="measured pose")
         if default_traj is not None:
-            pose_d = [float(np.interp(t, np.asarray(default_traj.t), np.asarray(getattr(default_traj, k))))
+            pose_d = [float(np.interp(t, np.asarray(default_traj.t) + result.contact_time, np.asarray(getattr(default_traj, k))))
                       for k in ("x", "z", "pitch")]  # fmt: skip
             dflt = outline_at(vehicle, *pose_d)
             ax.plot(*np.vstack([dflt, dflt[:1]]).T, "--", color="tab:red", lw=1, label="V-SIM defaults")

@@ -28,7 +28,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from identify.fitting import integrated_autocorrelation_time
+from identify.least_squares import integrated_autocorrelation_time
 
 PHASES = ("approach", "compression", "restitution", "after separation")
 

@@ -579,7 +579,7 @@ def sobol_indices(case: Case, uncertainty: Uncertainty, base_n: int = 512, seed:
 # ---------------------------------------------------------------- plots
 
 
-def plot_tornado(local: LocalSensitivity, spread: dict, path, outputs=None, fixed=()) -> None:
+def plot_tornado(local: LocalSensitivity, spread: dict, path, units: dict, outputs=None, fixed=()) -> None:
     """Tornado plot: per output, the linearised change of the output when each input moves
     by -/+ its spread (``spread``: name -> sigma or half-range), largest bar on top.
 
@@ -588,6 +588,7 @@ def plot_tornado(local: LocalSensitivity, spread: dict, path, outputs=None, fixe
     local : LocalSensitivity.
     spread : input name -> spread in the input's unit (inputs absent are left out).
     path : PNG file to write.
+    units : output name -> its unit (the panel's title and axis).
     outputs : names of the outputs to draw (default: all that exist at the baseline).
     fixed : inputs held fixed in the Monte Carlo (drawn pale, labelled "fixed"), whose
         spread is only a what-if (their default range).
@@ -619,7 +620,8 @@ def plot_tornado(local: LocalSensitivity, spread: dict, path, outputs=None, fixe
                 bar.set_alpha(a)
         ax.axvline(base, color="k", lw=0.8)
         ax.set_yticks(ys, [inputs[j] + (" (fixed)" if inputs[j] in fixed else "") for j in order], fontsize=8)
-        ax.set_title(f"{name} = {base:.4g}", fontsize=9)
+        ax.set_title(f"{name} = {base:.4g} {units[name]}", fontsize=9)
+        ax.set_xlabel(f"{name} [{units[name]}]", fontsize=8)
         ax.tick_params(axis="x", labelsize=8)
     axes.ravel()[0].legend(fontsize=7, loc="lower right")
     fig.suptitle("Linearised change of each output for each input moved by -/+ its spread (sigma or half-range;"

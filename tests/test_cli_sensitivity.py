@@ -75,11 +75,24 @@ def test_result_dir_run_writes_everything(result_run):
     assert dist["speed"] == {"kind": "normal", "mean": pytest.approx(56.3 / 3.6), "std": pytest.approx(0.05)}
     assert dist["mu_slip"] == {"kind": "fixed"}
     # the discovered front-wheel blocking rides along: the block time exists
-    assert doc["outputs"]["front_wheel_block_time"]["value"] == pytest.approx(0.0464, abs=0.002)
+    # the discovered depth (0.583 m) is the paper's tyre line: its block at 47-48 ms, one frame either side
+    assert 0.046 <= doc["outputs"]["front_wheel_block_time"]["value"] <= 0.049
     assert doc["outputs"]["rear_wheel_touchdown_time"]["value"] is None
     mc = doc["monte_carlo"]["outputs"]["max_crush"]
     lo, hi = mc["interval_90"]
-    assert lo < doc["outputs"]["max_crush"]["value"] < hi and hi - lo < 0.1
+    # the input spreads are small: the 90 % interval is about 2 x 1.645 linear standard
+    # deviations, sqrt(g' C g) from the written derivatives g and the covariance C this test
+    # wrote (plus the uniform mass range's 140 / sqrt(12) kg); 256 samples estimate an
+    # interval's width to ~10 %, and a uniform input's 90 % interval is 5 % narrower than a
+    # normal one's. Measured: 0.0285 m against 0.0315 m
+    deriv = doc["local"]["derivative"]["max_crush"]
+    sampled = [n for n in COV_NAMES if dist.get({"impact_speed": "speed"}.get(n, n), {}).get("kind") == "normal"]
+    g = np.array([deriv[{"impact_speed": "speed"}.get(n, n)] for n in sampled])
+    idx = [COV_NAMES.index(n) for n in sampled]
+    cov = (CORR * np.outer(STD, STD))[np.ix_(idx, idx)]
+    linear_sd = np.sqrt(g @ cov @ g + (deriv["mass"] * 140.0 / np.sqrt(12.0)) ** 2)
+    assert hi - lo == pytest.approx(2 * 1.645 * linear_sd, rel=0.2)
+    assert lo < doc["outputs"]["max_crush"]["value"] < hi
     assert doc["monte_carlo"]["samples"] == 256
     assert doc["sobol"]["inputs"] == NAMES + ["speed", "mass"] and doc["sobol"]["runs"] == 8 * 8
     assert doc["local"]["elasticity"]["max_crush"]["dz_contact"] is None

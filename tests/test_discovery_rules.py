@@ -206,7 +206,7 @@ def test_a_candidate_whose_fit_ends_at_a_bound_is_not_a_discovery(a4):
     values, std = PLAUSIBLE["rate_dependence"]
     fr = candidate_fit(values, std)
     fr.at_bound = {"rate_dependence.rate_coefficient": "at its upper bound 0.1 s/m"}
-    assert "the bound, not the recording" in _plausible("rate_dependence", fr, a4)
+    assert "at its upper bound 0.1 s/m: the fit's range, not the recording" in _plausible("rate_dependence", fr, a4)
 
 
 def test_an_engine_that_never_reaches_the_barrier_is_not_an_engine_impact(a4):

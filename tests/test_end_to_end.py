@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import SAMPLE_FILM
+from helpers import raw_10146
 from identify.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -93,7 +94,10 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     assert doc["parameters"]["dz_contact"]["identified"] is False
     assert "no pitch or height channel" in doc["parameters"]["dz_contact"]["reason"]
     check = doc["force_check"]
-    assert check["load_cells"] >= 1 and abs(check["momentum_check"]["error"]) < 0.035
+    # the recording's momentum balance, as computed from the raw files with numpy and scipy
+    # (tests/helpers.py; +0.03194, the program +0.03196; tolerance of tests/test_force_check.py)
+    assert check["load_cells"] >= 1
+    assert check["momentum_check"]["error"] == pytest.approx(raw_10146().momentum_error(), abs=5e-4)
     for key in ("peak_error", "impulse_error"):
         assert np.isfinite(check[key])
     assert 0.0 < check["iso18571"]["overall"] <= 1.0

@@ -98,30 +98,49 @@ TWO_BODY_NAMES = ONE_BODY_NAMES + ("engine_impact.engine_mass", "engine_impact.g
 
 
 def test_a_second_body_the_cabin_does_not_bear_out_is_a_warning_with_both_stiffnesses():
-    from identify.identification import second_body_warning
+    from identify.identification import second_body_doubts
 
     one = _cabin_fit(0.002, ONE_BODY_NAMES, 1.30e6, with_engine=False)
     two = _cabin_fit(0.002, TWO_BODY_NAMES, 0.95e6, with_engine=True)  # the same cabin misfit, 4 more parameters
-    text = second_body_warning(two, one)
+    text, disputed = second_body_doubts(two, one)
     assert "does not explain the cabin's motion better" in text
     assert "9.5e+05 N/m^3 with two bodies" in text and "1.3e+06 +- 2.6e+04 N/m^3 with the cabin alone" in text
+    # 3.5e5 apart, sqrt(1.9e4^2 + 2.6e4^2) = 3.22e4 combined: 10.9 sigma, the model's number, not the data's
+    assert list(disputed) == ["k_compression"]
+    assert disputed["k_compression"].startswith("not identified: it depends on the model")
+    assert "10.9 sigma apart" in disputed["k_compression"]
+
+
+@pytest.mark.parametrize("k_two, disputed", [(1.22e6, ["k_compression"]), (1.235e6, [])])
+def test_only_a_parameter_the_two_models_put_more_than_two_sigma_apart_is_disputed(k_two, disputed):
+    """Combined sigma sqrt((0.02 * 1.3e6)^2 + (0.02 * k_two)^2) ~ 3.6e4: 8.0e4 apart is 2.24
+    sigma (disputed), 6.5e4 is 1.81 (not); the threshold is 2."""
+    from identify.identification import MODEL_DISAGREEMENT, second_body_doubts
+
+    one = _cabin_fit(0.002, ONE_BODY_NAMES, 1.30e6, with_engine=False)
+    two = _cabin_fit(0.002, TWO_BODY_NAMES, k_two, with_engine=True)
+    sigma = np.hypot(0.02 * 1.30e6, 0.02 * k_two)
+    assert (abs(1.30e6 - k_two) > MODEL_DISAGREEMENT * sigma) == bool(disputed)
+    assert list(second_body_doubts(two, one)[1]) == disputed
 
 
 def test_a_second_body_that_explains_the_cabin_is_not_questioned():
-    from identify.identification import second_body_warning
+    from identify.identification import second_body_doubts
 
     one = _cabin_fit(0.003, ONE_BODY_NAMES, 1.30e6, with_engine=False)
-    two = _cabin_fit(0.001, TWO_BODY_NAMES, 1.25e6, with_engine=True)  # cabin chi2 1800 -> 200
-    assert second_body_warning(two, one) == ""
-    assert second_body_warning(one, one) == ""  # no engine channel: nothing to question
-    assert second_body_warning(two, None) == ""
+    two = _cabin_fit(0.001, TWO_BODY_NAMES, 1.00e6, with_engine=True)  # cabin chi2 1800 -> 200
+    assert second_body_doubts(two, one) == ("", {})  # however far apart: the cabin bears the engine out
+    assert second_body_doubts(one, one) == ("", {})  # no engine channel: nothing to question
+    assert second_body_doubts(two, None) == ("", {})
 
 
 def test_a_cabin_improvement_the_four_engine_parameters_do_not_pay_for_is_a_warning():
     """chi2 800 -> 770 on the cabin: 30 better, but 4 more parameters cost 4 ln 200 = 21.2, and
     the BIC must fall by 10."""
-    from identify.identification import second_body_warning
+    from identify.identification import second_body_doubts
 
     one = _cabin_fit(0.002, ONE_BODY_NAMES, 1.30e6, with_engine=False)
     two = _cabin_fit(0.002 * (770 / 800) ** 0.5, TWO_BODY_NAMES, 1.25e6, with_engine=True)
-    assert "does not explain the cabin's motion better" in second_body_warning(two, one)
+    text, disputed = second_body_doubts(two, one)
+    assert "does not explain the cabin's motion better" in text
+    assert disputed == {}  # 5e4 apart, 1.4 sigma: the number does not depend on the model

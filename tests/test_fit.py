@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from helpers import synthetic_measurement
-from identify.fitting import fit
+from identify.fitting import fit, log_scale_identifiability
 from sim import named_params
 
 TRUTH = {"k_compression": 970e3, "k_restitution": 600e3, "restitution": 0.17, "dz_contact": -0.21}
@@ -86,7 +86,7 @@ def test_force_height_not_identified_from_compression_alone_without_pitch(a4, pa
 
 
 def test_autocorrelation_time_is_one_for_white_noise_and_grows_with_correlation():
-    from identify.fitting import integrated_autocorrelation_time
+    from identify.least_squares import integrated_autocorrelation_time
 
     rng = np.random.default_rng(3)
     white = rng.normal(size=2000)
@@ -134,13 +134,35 @@ def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement):
     ("logit", {"lower": 0.05, "upper": 1.2}, 0.07, ""),
     ("tanh", {"scale": 0.010}, -0.0099, "at its lower bound -0.01"),
     ("tanh", {"scale": 0.010}, 0.0097, ""),
-    ("log", {"scale": 1e6}, 1e-3, ""),
+    ("log", {"scale": 1e6}, 3e6, ""),
+    ("log", {"scale": 1e6}, 9.7e12, "far outside any plausible value (9.7e+12 m, 9.7e+06 times its scale)"),
+    ("log", {"scale": 1e6}, 1e-3, "far outside any plausible value"),
+    ("log", {"scale": 1e6}, 0.9e9, ""),
 ])
 def test_a_value_within_one_percent_of_a_bound_is_at_its_bound(transform, kw, value, words):
     from identify.model import FreeParameter
 
     where = FreeParameter("p", "m", transform, **kw).at_bound(value)
     assert (where.startswith(words) if words else where == ""), where
+
+
+def test_a_log_scale_parameter_known_to_no_better_than_20_percent_is_not_identified():
+    from identify.model import FreeParameter
+
+    free = (FreeParameter("engine_impact.k_rear", "N/m", "log", scale=1e6),
+            FreeParameter("engine_impact.k_engine", "N/m", "log", scale=1e6),
+            FreeParameter("k_compression", "N/m^3", "log", scale=1e6),  # judged by its own rule
+            FreeParameter("engine_impact.gap", "m", "logit", lower=0.05, upper=1.2))
+    values = {"engine_impact.k_rear": 1.7e5, "engine_impact.k_engine": 1.2e6, "k_compression": 1e6,
+              "engine_impact.gap": 0.15}
+    std = {"engine_impact.k_rear": 1.18e5, "engine_impact.k_engine": 0.2e6, "k_compression": 5e5,
+           "engine_impact.gap": 0.1}
+    out = log_scale_identifiability(free, values, std)
+    assert list(out) == ["engine_impact.k_rear"]  # 69 %; k_engine 17 % is identified
+    assert out["engine_impact.k_rear"] == (False, "not identified (std 69 %): the recorded motion barely changes"
+                                                  " when it changes")
+    std["engine_impact.k_engine"] = float("nan")
+    assert "engine_impact.k_engine" in log_scale_identifiability(free, values, std)
 
 
 def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_measurement):

@@ -6,11 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from helpers import cfc_scipy, last_above, raw_10146, raw_ev5_channel
 from identify.errors import UserError
 from identify.force_check import (_dtw_path, check_forces, compare_forces, end_of_contact,
                                   force_check_document, iso18571, measured_force, momentum_check,
                                   rigid_body_force)
-from identify.recordings import Channel, SensorTest, measurement_from_test, read_nhtsa
+from identify.recordings import Channel, SensorTest, contact_time, measurement_from_test, read_nhtsa
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 
@@ -18,6 +19,20 @@ DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 @pytest.fixture(scope="module")
 def force(test10146):
     return measured_force(test10146)
+
+
+@pytest.fixture(scope="module")
+def raw():
+    """The independent reference: 10146's raw channel files processed with numpy and scipy
+    (tests/helpers.py, ``Raw10146``), on the recording's clock (NHTSA's t = 0)."""
+    return raw_10146()
+
+
+@pytest.fixture(scope="module")
+def contact_s(test10146):
+    """The program's first contact on the recording's clock (s): its force-check times count
+    from it (-0.03 ms here; within 1 ms of NHTSA's contact switch, tests/test_nhtsa.py)."""
+    return contact_time(test10146)[0]
 
 
 @pytest.fixture(scope="module")
@@ -29,23 +44,47 @@ def camry_run(test10146):
     return simulate(p, load_vehicle("toyota_camry_2018"), speed=test10146.impact_speed_mps, duration=0.2)
 
 
-def test_measured_force_of_10146(force):
+def test_measured_force_of_10146(force, raw, contact_s):
     assert force.cfc == 60 and force.n_cells == 1
-    pos = force.t >= 0
+    # Reference: channel 900 (the raw sum of the 174 cells) less its pre-impact mean, sign
+    # turned, filtered with scipy's J211 CFC 60: peak 678.03 kN at 35.0 ms, contact ends at
+    # 109.1 ms. The program's curve is that curve: 2e-7 N apart away from the record's ends
+    # (within 20 ms of the ends the two filters' end paddings differ, by up to 745 N).
+    assert np.allclose(force.t + contact_s, raw.t, rtol=0, atol=1e-9)
+    inner = (raw.t >= -0.03) & (raw.t <= 0.28)
+    np.testing.assert_allclose(force.force[inner], raw.force60[inner], rtol=0, atol=1.0)
     i = np.argmax(force.force)
-    assert force.force[i] == pytest.approx(678e3, rel=0.02)
-    assert 30e-3 < force.t[i] < 40e-3
-    assert 0.100 < end_of_contact(force.t[pos], force.force[pos]) < 0.125
+    assert force.force[i] == pytest.approx(raw.peak_N, rel=1e-6)
+    assert force.t[i] + contact_s == pytest.approx(raw.peak_s, abs=1e-6)
+    pos = force.t >= 0
+    assert end_of_contact(force.t[pos], force.force[pos]) + contact_s == pytest.approx(raw.contact_end_s, abs=1e-6)
     # offset-free before contact
     assert abs(np.mean(force.force[force.t < -0.005])) < 50.0
 
 
-def test_impulse_matches_momentum_change(force, motion, test10146):
+def test_impulse_matches_momentum_change(force, motion, test10146, raw, contact_s):
     check = momentum_check(force, test10146.mass_kg, motion.t, motion.channels["vx_mps"])
-    # measured: the barrier's impulse is 3.2 % above 1719 kg times the crossmembers' change
-    # of velocity over the contact; the brief asks for 3 %, the data give 3.2 (see README)
-    assert abs(check["error"]) < 0.035
-    assert check["impulse_Ns"] == pytest.approx(32.8e3, rel=0.02)
+    # Reference, from the raw files (tests/helpers.py): the trapezoid of the unfiltered
+    # summed force from NHTSA's t = 0 to the end of contact (109.1 ms), 32801.1 N s; the
+    # header's 1719 kg times the change of velocity of the raw crossmember mean integrated
+    # from 57.09 km/h, 18.4909 m/s; impulse / momentum change - 1 = +0.031939. The program
+    # (CFC 60 force, CFC 180 accelerations) gives 32800.5 N s and +0.031964. Tolerances 5e-4
+    # (relative, and absolute on the ratio): the filters account for the 2e-5 and 3e-5
+    # measured; ending the pre-impact window at 0 instead of -5 ms would move the ratio by
+    # 9.6e-4 (how well the recording knows it; see Raw10146).
+    t_end = raw.contact_end_s
+    assert check["t_end_ms"] + contact_s * 1e3 == pytest.approx(t_end * 1e3, abs=0.1)
+    assert check["impulse_Ns"] == pytest.approx(raw.impulse(0.0, t_end), rel=5e-4)
+    assert check["momentum_change_Ns"] == pytest.approx(raw.mass_kg * raw.delta_v(t_end), rel=5e-4)
+    assert check["error"] == pytest.approx(raw.momentum_error(), abs=5e-4)
+
+
+@pytest.mark.xfail(strict=True, reason="the recording's own momentum balance is +3.2 %: the impulse of the "
+                   "174 load cells is 3.2 % above 1719 kg times the crossmembers' change of velocity, "
+                   "computed from the raw files (test_impulse_matches_momentum_change)")
+def test_momentum_balance_within_3_percent(force, motion, test10146):
+    check = momentum_check(force, test10146.mass_kg, motion.t, motion.channels["vx_mps"])
+    assert abs(check["error"]) < 0.03
 
 
 def test_identical_curves_score_one(force):
@@ -160,36 +199,69 @@ def test_no_barrier_channels(tmp_path):
         measured_force(t)
 
 
-def test_force_check_document_is_json_ready(test10146, motion, camry_run, tmp_path):
+def test_force_check_document_is_json_ready(test10146, motion, camry_run, tmp_path, raw):
     import json
 
     doc = force_check_document(test10146, motion, camry_run, tmp_path)
     back = json.loads(json.dumps(doc))
     assert back["load_cells"] == 1 and back["cfc"] == 60
-    assert abs(back["momentum_check"]["error"]) < 0.035
+    # the raw files' momentum balance (test_impulse_matches_momentum_change)
+    assert back["momentum_check"]["error"] == pytest.approx(raw.momentum_error(), abs=5e-4)
     assert 0 < back["iso18571"]["overall"] < 1
     assert (tmp_path / "forces.csv").exists()
 
 
-def test_the_camry_is_not_rigid(test10146, motion, camry_run, tmp_path):
+def test_the_camry_is_not_rigid(test10146, motion, camry_run, tmp_path, raw, contact_s):
     """Test mass x the crossmembers' deceleration against the load cells: the right impulse
     and peak size, but the engine's hit at 30-35 ms reaches the barrier, not the cabin."""
     doc = force_check_document(test10146, motion, camry_run, tmp_path)
     rb = doc["rigid_body"]
-    assert rb["impulse_error"] == pytest.approx(-0.030, abs=0.005)  # the momentum check, mirrored
-    assert abs(rb["peak_error"]) < 0.06 and 60.0 < rb["peak_time_predicted_ms"] < 70.0
-    assert rb["peak_time_measured_ms"] < 40.0
-    assert rb["iso18571"]["overall"] < 0.75 and rb["iso18571"]["slope"] < 0.5
+    c_ms = contact_s * 1e3  # the program's times count from its contact: add it back
+    # Reference: the header's 1719 kg times the raw crossmember mean deceleration, both it and
+    # the barrier sum filtered with scipy's CFC 60, on the recording's clock.
+    rigid = -raw.mass_kg * cfc_scipy(raw.mean_accel, raw.fs, 60)
+    pos = raw.t >= 0
+    # compare_forces' window: contact to 10 ms after the later end of contact (the rigid
+    # body's, 112.7 ms): 122.7 ms
+    t1 = max(raw.contact_end_s, last_above(raw.t[pos], rigid[pos])) + 0.010
+    assert rb["window_ms"][1] + c_ms == pytest.approx(t1 * 1e3, abs=0.1)
+    # Impulse error: 1719 kg x the raw change of velocity over the window / the raw impulse
+    # over it - 1 = -0.03070 (the momentum balance over this longer window, mirrored); the
+    # program -0.03049 (its CFC 60 curves spread the onset of the force before t = 0: 2e-4).
+    assert rb["impulse_error"] == pytest.approx(raw.mass_kg * raw.delta_v(t1) / raw.impulse(0.0, t1) - 1.0, abs=5e-4)
+    # Peaks: 702.97 kN at 64.2 ms against 678.03 kN at 35.0 ms, +3.678 %; the program +3.682 %
+    # (the same curves interpolated on its 10 kHz grid, shifted by its contact, -0.03 ms).
+    k = int(np.argmax(rigid))
+    assert rb["peak_error"] == pytest.approx(rigid[k] / raw.peak_N - 1.0, abs=5e-4)
+    assert rb["peak_time_predicted_ms"] + c_ms == pytest.approx(raw.t[k] * 1e3, abs=0.1)
+    assert rb["peak_time_measured_ms"] + c_ms == pytest.approx(raw.peak_s * 1e3, abs=0.1)
+    # The physical argument: the barrier's peak is the engine block's hit (curve 095, top of
+    # engine, CFC 60: its peak deceleration at 29 ms), which the cabin feels only later, so a
+    # rigid car moving as the cabin does peaks more than 10 ms after the barrier (64.2 - 35.0 ms).
+    _, engine = raw_ev5_channel(95)
+    t_engine = raw.t[int(np.argmin(cfc_scipy(engine - engine[raw.t <= -0.005].mean(), raw.fs, 60)))]
+    assert abs(raw.peak_s - t_engine) < 0.010 < raw.t[k] - t_engine
+    assert rb["peak_time_predicted_ms"] - rb["peak_time_measured_ms"] > 10.0
+    # ISO 18571: the scores of the reference curves over the window (the rating itself is
+    # checked against objective_rating_metrics in test_iso18571_agrees_with_a_reference_
+    # implementation; measured differences up to 1.4e-4, from the program's shifted grid) ...
+    w = (raw.t >= -1e-9) & (raw.t <= t1 + 1e-9)
+    ref = iso18571(raw.force60[w], rigid[w], 1.0 / raw.fs)
+    for key in ("corridor", "phase", "magnitude", "slope", "overall"):
+        assert rb["iso18571"][key] == pytest.approx(getattr(ref, key), abs=2e-3), key
+    # ... below ISO/TS 18571's class "good" (R > 0.80): no good prediction of the barrier force
+    assert rb["iso18571"]["overall"] < 0.80
     t, f = rigid_body_force(test10146)
     force = measured_force(test10146)
     at = np.interp([0.030, 0.035], t, f)
     barrier = np.interp([0.030, 0.035], force.t, force.force)
     assert np.all(at < 0.5 * barrier)
-    # each accelerometer alone: the 3.2 % of the mean lies within their spread
+    # each accelerometer alone: its raw file's momentum balance (+2.30 to +4.01 %), to the
+    # tolerance of test_impulse_matches_momentum_change (measured differences up to 5e-5)
     each = doc["momentum_check"]["per_accelerometer"]
     assert set(each) == {"93", "94", "99", "100"}
-    assert min(each.values()) < doc["momentum_check"]["error"] < max(each.values())
-    assert 0.01 < max(each.values()) - min(each.values()) < 0.03
+    for code, error in each.items():
+        assert error == pytest.approx(raw.momentum_error(raw.accel[code]), abs=5e-4), code
 
 
 def _rigid_test(mass=1500.0, peak=4e5, mass_in_header=True):

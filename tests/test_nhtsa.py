@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from helpers import integrate_from, raw_10146
 from identify.errors import UserError
 from identify.recordings import crash_facts, measurement_from_test, read_nhtsa
 from identify.recordings.motion import combine, find_onset
@@ -15,6 +16,13 @@ from identify.recordings.nhtsa import (barrier_force_channels, load_ev5_channel,
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "nhtsa-10146"
 HEADER = DATA / "v10146.EV5"
+
+
+@pytest.fixture(scope="module")
+def raw():
+    """The independent reference: the raw channel files integrated with numpy and scipy
+    (tests/helpers.py, ``Raw10146``), on the recording's clock."""
+    return raw_10146()
 
 
 def _copy(tmp_path, curves=(93, 94, 99, 100, 900), edit=None):
@@ -69,17 +77,40 @@ def test_channel_selection(test10146):
     assert test10146.barrier[0].values.max() > 6e5
 
 
-def test_crush_and_timing_of_10146(motion):
-    facts = crash_facts(motion)
-    assert facts["max_crush_m"] == pytest.approx(0.75, abs=0.02)
-    assert facts["max_crush_ms"] == pytest.approx(74.0, abs=2.0)
-    assert motion.events_ms["compression_end"] == pytest.approx(facts["max_crush_ms"], abs=0.5)
+def _contact_ms(m):
+    """The Measurement's first contact (recording time, ms), as its note reports it."""
+    note = next(n for n in m.notes if n.startswith("first contact"))
+    return float(note.split(" at ")[1].split(" ms")[0])
 
 
-def test_rebound_of_10146(motion):
+def test_crush_and_timing_of_10146(motion, raw):
+    # Reference: the four raw crossmember accelerations, offsets removed, averaged, g ->
+    # m/s^2, integrated by trapezoid from the header's 57.09 km/h at NHTSA's t = 0 (the
+    # contact switch), unfiltered: 0.74089 m at 73.4 ms. The program (CFC 180, integration
+    # from the sample nearest its own contact time, -0.03 ms, i.e. the same sample; the
+    # Measurement resampled to 1 kHz) gives 0.74085 m at 73.0 ms. Tolerances: 1 mm (the CFC
+    # 180 filter alone moves the crush by 0.01 mm, a contact one sample (0.1 ms) off would move
+    # it by v0 x 0.1 ms = 1.6 mm) and the Measurement's 1 ms grid.
     facts = crash_facts(motion)
-    assert 2.3 <= facts["rebound_mps"] <= 2.6
-    assert 100.0 <= facts["separation_ms"] <= 125.0
+    assert facts["max_crush_m"] == pytest.approx(raw.max_crush_m, abs=1e-3)
+    assert facts["max_crush_ms"] == pytest.approx(raw.max_crush_s * 1e3, abs=1.0)
+    # compression_end is found at the recording's 10 kHz: the reference's sample (73.4 ms)
+    assert motion.events_ms["compression_end"] == pytest.approx(raw.max_crush_s * 1e3, abs=0.15)
+
+
+def test_rebound_of_10146(motion, raw):
+    facts = crash_facts(motion)
+    # Separation: the last time the summed barrier force, filtered with a scipy CFC 60
+    # (J211's corner), is above 2 % of its peak: 109.1 ms recording time. The program's
+    # times count from its contact (-0.03 ms recording time): add it back; one 10 kHz
+    # sample of tolerance.
+    assert facts["separation_ms"] + _contact_ms(motion) == pytest.approx(raw.contact_end_s * 1e3, abs=0.1)
+    # Rebound: the mean backward speed of the raw integration after that: 2.4436 m/s; the
+    # program (CFC 180, its 1 kHz Measurement, samples from 110 ms) gives 2.4433 m/s.
+    # Tolerance 3 mm/s (10x that difference; the choice of the pre-impact window alone, t <= -5
+    # ms or t < 0, moves the reference by 30 mm/s, see Raw10146).
+    assert facts["rebound_mps"] == pytest.approx(raw.rebound_mps, abs=3e-3)
+    assert facts["delta_v_mps"] == pytest.approx(raw.v0 + raw.rebound_mps, abs=3e-3)
 
 
 def test_measurement_shape_and_sigma(motion, test10146):
@@ -104,15 +135,23 @@ def test_contact_time_from_barrier_force_matches_nhtsa_time_zero(motion):
     assert abs(ms) < 1.0
 
 
-def test_contact_from_vehicle_pulse_alone_lags_the_bumper(tmp_path):
+def test_contact_from_vehicle_pulse_alone_lags_the_bumper(tmp_path, raw):
     t = read_nhtsa(HEADER, barrier=False)
     assert t.barrier == ()
     m = measurement_from_test(t)
     note = next(n for n in m.notes if n.startswith("first contact"))
-    ms = float(note.split(" at ")[1].split(" ms")[0])
+    ms = _contact_ms(m)
     assert 1.0 < ms < 6.0 and "vehicle deceleration" in note
-    # the later zero loses the bumper's first centimetres of crush
-    assert crash_facts(m)["max_crush_m"] < 0.75
+    # The later zero loses the bumper's first centimetres of crush: the raw integration
+    # started at that time (3.1 ms, the nearest sample) gives 0.69195 m, the program
+    # 0.69191 m (1 mm as in test_crush_and_timing_of_10146) ...
+    _, _, x_late = integrate_from(raw.t, raw.mean_accel, ms / 1e3, raw.v0)
+    crush = crash_facts(m)["max_crush_m"]
+    assert crush == pytest.approx(float(np.max(x_late)), abs=1e-3)
+    # ... which is the crush from NHTSA's t = 0 less the travel at the impact speed during
+    # the lag (v0 x 3.1 ms = 49.2 mm; measured loss 49.0 mm: the car has hardly slowed yet)
+    lag = float(raw.t[np.argmin(np.abs(raw.t - ms / 1e3))])
+    assert raw.max_crush_m - crush == pytest.approx(raw.v0 * lag, abs=1e-3)
 
 
 def test_find_onset_of_a_ramp():

@@ -265,7 +265,8 @@ def test_simulate_and_render_matches_the_model(tmp_path):
     assert cols["crush_m"][5] == pytest.approx(0.0, abs=1e-9) and cols["crush_m"][-1] > 0.3
     # the rear wheel is drawn on the floor until the model lifts it
     lift_ms = meta["events_ms"]["rear_wheel_lift"]
-    assert lift_ms is not None and 5 < lift_ms < 50
+    # inside the 50 ms rendered (a precondition of the checks below, not a claim about when)
+    assert lift_ms is not None and 0 < lift_ms < 50
     t_ms = cols["t_s"] * 1000
     up = t_ms[cols["rear_wheel_height_m"] > 1e-9]
     assert up.size and abs(up[0] - lift_ms) <= 1.0

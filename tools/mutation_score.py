@@ -12,6 +12,13 @@ guards. Printed: per file, killed / survived / other (timeouts, no tests) and th
 killed / (killed + survived); then every survivor by name (``mutmut show NAME`` shows its
 diff). Each survivor in a core module is either killed by a new test or explained in the
 issue note; the score is not a target to game.
+
+Second pass, for JAX: mutmut maps a test to the functions it saw the test call, and a
+jit-compiled function is called only by the test that first traces it (later tests hit the
+compile cache), while tests that read a shared, already simulated run call nothing. So a
+first-pass survivor of ``sim/`` may never have met the tests that would kill it. After the
+first pass every selected test is mapped to every function of the jit-compiled modules
+(``JIT_MODULES``) and the survivors are run again against all of them.
 """
 
 from __future__ import annotations
@@ -26,6 +33,26 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 KILLED = {1, 3, 37}  # mutmut's exit codes meaning the tests (or the type check) caught it
 SURVIVED = {0}
+JIT_MODULES = ("sim.",)  # functions traced under jax.jit: mutmut's test map misses callers
+
+
+def widen_test_map(stats_file: Path, prefixes=JIT_MODULES) -> int:
+    """Map every test mutmut ran to every function of the modules starting with ``prefixes``
+    in mutmut's stats file; returns the number of functions widened."""
+    stats = json.loads(stats_file.read_text())
+    every = sorted(stats["duration_by_test"])
+    table = stats["tests_by_mangled_function_name"]
+    widened = [k for k in table if k.startswith(prefixes)]
+    for k in widened:
+        table[k] = every
+    stats_file.write_text(json.dumps(stats))
+    return len(widened)
+
+
+def survivors_of(results: dict[str, dict[str, int | None]], prefixes=JIT_MODULES) -> list[str]:
+    """Names of surviving mutants of the functions in modules starting with ``prefixes``."""
+    return sorted(k for codes in results.values() for k, v in codes.items()
+                  if v in SURVIVED and k.startswith(prefixes))
 
 
 def read_results(mutants: Path) -> dict[str, dict[str, int | None]]:
@@ -59,12 +86,18 @@ def main(argv=None) -> int:
     ap.add_argument("--max-children", type=int, default=2, help="mutants run at once (default 2: the 2 cores)")
     args = ap.parse_args(argv)
     if not args.report:
+        run = [sys.executable, "-m", "mutmut", "run", "--max-children", str(args.max_children)]
         try:
-            subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.max_children)],
-                           cwd=ROOT, check=False)
+            subprocess.run(run, cwd=ROOT, check=False)
         except FileNotFoundError:
             print("mutmut is not installed: python -m pip install -e '.[test,mutation]'", file=sys.stderr)
             return 2
+        again = survivors_of(read_results(ROOT / "mutants"))
+        if again:
+            n = widen_test_map(ROOT / "mutants" / "mutmut-stats.json")
+            print(f"second pass: {len(again)} survivors of the jit-compiled modules against every selected test"
+                  f" ({n} functions re-mapped)")
+            subprocess.run(run + again, cwd=ROOT, check=False)
     results = read_results(ROOT / "mutants")
     if not results:
         print("no mutation results in mutants/: run without --report first", file=sys.stderr)

@@ -530,7 +530,7 @@ def _run(args, folder, ranges, times) -> int:
         (folder / "sensitivity.csv").write_text(_csv_rows(local, spread, sobol, units))
         (folder / "intervals.csv").write_text(_intervals_csv(summary, units))
         (folder / "monte_carlo.csv").write_text(_runs_csv(mc.inputs, mc.outputs, names))
-        sens.plot_tornado(local, spread, folder / "tornado.png", fixed=set(spread) - set(uncertainty.varied))
+        sens.plot_tornado(local, spread, folder / "tornado.png", units, fixed=set(spread) - set(uncertainty.varied))
         sens.plot_distributions(mc.outputs, names, units, summary, folder / "distributions.png")
         labels = (Path(str(args.params)).stem if args.params else "identified", args.compare_with)
         title = f"{vehicle.name}, {speed * 3.6:.1f} km/h"

@@ -1,0 +1,72 @@
+"""Identification on data our model did not make: a clean ISO-MME recording of the reference
+world (``synth``: its own car model, with an engine on mounts that does not reach the
+barrier, accelerometers with noise and offsets, a speed trap), fitted as a user would.
+
+The rule it guards is the brief's first: no number said with confidence that the truth
+contradicts. Every collision parameter the result calls identified lies within 3 of its
+reported standard deviations of the world's truth, and the measured impact speed within 3
+of its own. On these worlds the engine fitted as a second body pulls k_compression 25-33 %
+low (z -2 to -4) while the cabin's motion does not bear the second body out; the result
+must then say that k_compression depends on the model. And discovery, run as the command
+line runs it, names nothing on this clean world. Seed 300 (tests use seeds below
+1000; the accuracy benchmark scores on seeds from 910,000)."""
+
+from __future__ import annotations
+
+import pytest
+
+from identify.identification import COLLISION_PARAMETERS
+
+SEED = 300
+Z_MAX = 3.0
+
+
+@pytest.fixture(scope="module")
+def clean_world_fit(tmp_path_factory):
+    import identify
+    from synth.world import make_world, write_world
+
+    folder = tmp_path_factory.mktemp("reference") / "world"
+    truth = write_world(make_world(SEED, "clean", None, "isomme"), folder)
+    ident = identify.fit(folder / truth["recording"], folder / "vehicle.toml", write=False, discover=True)
+    return ident, truth
+
+
+@pytest.mark.slow
+def test_no_identified_parameter_contradicts_the_truth(clean_world_fit):
+    ident, truth = clean_world_fit
+    doc = ident.document
+    identified = {n: p for n, p in doc["parameters"].items() if n in COLLISION_PARAMETERS and p["identified"]}
+    assert identified, "the test needs something identified to check"
+    for name, p in identified.items():
+        z = (p["value"] - truth["params"][name]) / p["std"]
+        assert abs(z) < Z_MAX, (name, p, truth["params"][name])
+    for name, p in doc["parameters"].items():
+        assert p["identified"] or p["reason"], name  # what is not identified says why
+    z_speed = (doc["impact_speed_kmh"] - truth["v0_kmh"]) / doc["impact_speed_std_kmh"]
+    assert abs(z_speed) < Z_MAX
+
+
+@pytest.mark.slow
+def test_discovery_names_no_physics_the_world_does_not_have(clean_world_fit):
+    # the world is clean (no zone, no wheel block, no rate dependence, no rear lift, the engine
+    # never reaches the barrier); it is richer than the model (its engine rides on mounts, its
+    # unloading is curved), which discovery may call "unexplained", never by a wrong name
+    ident, _ = clean_world_fit
+    named = [d["effect"] for d in ident.document["discoveries"] if d["effect"] != "unexplained"]
+    assert named == [], ident.document["discovery_status"]
+    tried = {t["effect"] for r in ident.document["discovery_rounds"] for t in r}
+    assert "stiffness_zone" in tried and "front_wheel_block" in tried  # it did look
+
+
+@pytest.mark.slow
+def test_the_cabin_alone_fit_the_result_offers_agrees_with_the_truth(clean_world_fit):
+    # the alternative a disputed parameter's reason gives: the one-body model fitted to the
+    # cabin's channels alone
+    ident, truth = clean_world_fit
+    one = ident.one_body
+    assert one is not None and "engine_vx_mps" not in one.predictions
+    checked = [n for n in COLLISION_PARAMETERS if n in one.values and one.identified.get(n, (True, ""))[0]]
+    assert "k_compression" in checked
+    for name in checked:
+        assert abs(one.values[name] - truth["params"][name]) < Z_MAX * one.std[name], name
