@@ -51,3 +51,20 @@ def test_a_nose_down_pitch_loads_the_front_axle_and_unloads_the_rear(a4):
     # and the springs pitch it back, nose up: -(k_f a^2 + k_r b^2) * 0.01 (the weight's lever,
     # the axle loads times (h - r) * 0.01, is a few per cent of it)
     assert moment[2] == pytest.approx(-(k[0] * a**2 + k[1] * b**2) * 0.01, rel=0.1)
+
+
+@pytest.mark.parametrize("speed", [0.0, 0.25, 0.5, 5.0])
+def test_blocked_front_tyres_slide_on_the_stribeck_curve_and_the_rear_ones_roll(a4, speed):
+    """Blocked front wheels, the car level, moving at ``speed``: each front tyre pushes back
+    with mu_block(v) N, mu_block(v) = mu_slip + (mu_adhesion - mu_slip) exp(-(v / 0.5 m/s)^2)
+    (docs/physics.md's friction jump, with the Stribeck drop), the rear with the rolling
+    resistance; both times tanh(v / 0.02 m/s), the sign's smoothing."""
+    solver = Solver()
+    force, normal, *_ = ground_forces(jnp.zeros(3), jnp.asarray([speed, 0.0, 0.0]), a4, PARAMS, jnp.asarray(1.0), solver)
+    mu_s, mu_a, rr = (float(getattr(PARAMS, n)) for n in ("mu_slip", "mu_adhesion", "rolling_resistance"))
+    mu_front = mu_s + (mu_a - mu_s) * np.exp(-(speed / solver.stribeck_speed) ** 2)
+    sign = np.tanh(speed / solver.friction_speed_width)
+    expected = -(mu_front * float(normal[0]) + rr * float(normal[1])) * sign
+    assert float(force[0]) == pytest.approx(expected, rel=1e-9, abs=1e-9)
+    if speed > 0:
+        assert float(force[0]) < -rr * float(np.sum(normal)) * sign  # more than rolling alone
