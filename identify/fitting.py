@@ -75,8 +75,9 @@ class FitResult:
 
     values, std : name -> value, one-sigma uncertainty.
     covariance, correlation : (p, p) in the order of ``names``.
-    identified : name -> (bool, reason) for the collision parameters, and for any fitted
-        quantity that ended at a bound of its transform.
+    identified : name -> (bool, reason) for the collision parameters, for other log-scale
+        parameters known no better than ``LOG_SCALE_NOT_IDENTIFIED``, and for any fitted
+        quantity that ended at a bound of its transform (:meth:`mark_not_identified`).
     at_bound : name -> which bound, for fitted quantities within 1 % of a bound of their
         transform's range (``FreeParameter.at_bound``).
     rms : channel -> RMS residual in the channel's unit; rms_m the x channel's (m).
@@ -115,6 +116,12 @@ class FitResult:
     at_bound: dict[str, str] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
+
+    def mark_not_identified(self, name: str, reason: str) -> None:
+        """Record that ``name`` is not identified, ``reason`` reading "not identified: ...";
+        a reason it already had is kept, the new one added after it."""
+        ok, before = self.identified.get(name, (True, ""))
+        self.identified[name] = (False, reason if ok else f"{before}; and {reason.removeprefix('not identified: ')}")
 
     def pulls(self) -> dict[str, dict]:
         """name -> {prior, prior_std, value, std, pull, conflict} for each fitted quantity
@@ -418,9 +425,7 @@ def fit(
     # no silent bounds: a value the bound stopped is not a value the data gave
     result.at_bound = {p.name: where for p in free if (where := p.at_bound(result.values[p.name]))}
     for name, why in result.at_bound.items():
-        ok, reason = result.identified.get(name, (True, ""))
-        result.identified[name] = (False, f"{reason}; it ended {why}" if not ok else
-                                   f"not identified: {why}, where the fit stopped it")
+        result.mark_not_identified(name, f"not identified: {why}, where the fit stopped it")
     if require_convergence and not result.converged and result.reduced_chi2 > 100:
         raise UserError(
             f"{measurement.source}: the fit did not converge (reduced chi-square {result.reduced_chi2:.3g} after"

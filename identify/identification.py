@@ -374,8 +374,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         discoveries, status = [], "discovery of missing physics was switched off (--no-discover)"
     engine_doubt, disputed = second_body_doubts(fr, one_body)
     for name, reason in disputed.items():  # the data do not decide between the two models there
-        ok, before = fr.identified.get(name, (True, ""))
-        fr.identified[name] = (False, reason if ok else f"{before}; and {reason.removeprefix('not identified: ')}")
+        fr.mark_not_identified(name, reason)
     doc = result_document(fr, rec, veh, discoveries=discoveries, discovery_status=status, held=held,
                           vehicle_ref=vehicle_reference(vehicle))
     if found is not None:  # every candidate tried, round by round, and why it was not accepted

@@ -165,6 +165,20 @@ def test_a_log_scale_parameter_known_to_no_better_than_20_percent_is_not_identif
     assert "engine_impact.k_engine" in log_scale_identifiability(free, values, std)
 
 
+def test_a_second_reason_not_to_identify_keeps_the_first():
+    from types import SimpleNamespace
+
+    from identify.fitting import FitResult
+
+    fr = SimpleNamespace(identified={"k_restitution": (False, "not identified (std 108 %): the motion barely changes")})
+    FitResult.mark_not_identified(fr, "k_compression", "not identified: it depends on the model")
+    FitResult.mark_not_identified(fr, "k_restitution", "not identified: at its upper bound, where the fit stopped it")
+    assert fr.identified == {
+        "k_compression": (False, "not identified: it depends on the model"),
+        "k_restitution": (False, "not identified (std 108 %): the motion barely changes; and at its upper bound,"
+                                 " where the fit stopped it")}
+
+
 def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_measurement):
     """The recording's clock 25 ms off (contact at -25 ms, the model allows +-10 ms): the fit
     parks the contact time at its bound, and must not report that value as measured."""
