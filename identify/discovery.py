@@ -268,38 +268,14 @@ def _held_out_chi2(fits, folds, measurement, tau) -> float:
 
 def effect_window_ms(fr: FitResult, effect: str) -> tuple[float, float] | None:
     """ms after first contact (measurement clock) where the accepted effect acts in the
-    fitted model: the front wheels blocked, the rear wheels off the ground, or the loading
-    force differing from the base law by more than 2 % of the mechanism's largest
-    contribution (clipped to the recording)."""
-    import jax.numpy as jnp
-
-    tr = fr.trajectory
-    t = np.asarray(tr.t) * 1e3 + fr.contact_time * 1e3
-    if effect == "front_wheel_block":
-        active = np.asarray(tr.front_blocked) > 0.5
-    elif effect == "rear_axle_lift":
-        active = np.asarray(tr.rear_margin) < 0.0
-    else:
-        mech = next(m for m in fr.params.mechanisms if m.effect == effect)
-        crush = np.asarray(tr.crush)
-        rate = np.gradient(crush, np.asarray(tr.t))
-        loading = (crush >= np.asarray(tr.crush_max) - 1e-9) & (rate > 0)
-        f0 = float(fr.params.k_compression) * crush  # N/m^2: the base law per unit contact area
-        extra = np.asarray(mech.loading_force(jnp.asarray(f0), jnp.asarray(crush), jnp.asarray(rate),
-                                              fr.params, _UnitArea())) - f0
-        extra = np.where(loading, np.abs(extra), 0.0)
-        active = extra > 0.02 * extra.max() if extra.max() > 0 else np.zeros_like(extra, bool)
-    active &= t <= float(np.max(fr.measurement.t)) * 1e3  # the model runs a little past the recording
+    fitted model (``Candidate.acting``: the front wheels blocked, the rear wheels off the
+    ground, the loading force changed...), clipped to the recording; None where it never acts."""
+    t = np.asarray(fr.trajectory.t) * 1e3 + fr.contact_time * 1e3
+    active = BY_EFFECT[effect].acting(fr) & (t <= float(np.max(fr.measurement.t)) * 1e3)  # the model runs past it
     if not active.any():
         return None
     idx = np.flatnonzero(active)
     return round(float(t[idx[0]]), 1), round(float(t[idx[-1]]), 1)
-
-
-class _UnitArea:
-    """Stands in for a Vehicle in mechanism hooks evaluated per unit contact area."""
-
-    contact_area = 1.0
 
 
 def _discovery_entry(effect, before: FitResult, after: FitResult, tau, cv_gain, vehicle) -> dict:
@@ -343,14 +319,11 @@ def phases_spanned(window, phases) -> str:
     return " and ".join(dict.fromkeys(names))
 
 
-# parameters whose value 0 switches their mechanism off: a fit that cannot tell them from 0
-# has not found the mechanism (it has spent a parameter on a combination the others already fix)
-_ZERO_IS_OFF = {"progressive_stiffness": ("progressive_stiffness.progression",),
-                "rate_dependence": ("rate_dependence.rate_coefficient",)}
-
-
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
-    """'' when the fitted mechanism acts inside the recorded crash, else why not."""
+    """'' when the fitted candidate is a finding, else why not. Every candidate: no prior
+    pulled beyond 3 sigma, no parameter at a bound or undetermined, a depth the crush reaches
+    and the data fix; then its own evidence check over the window where it acts and its own
+    rules (``Candidate.evidence``, ``Candidate.implausible``)."""
     crush_max = float(np.max(np.asarray(fr.trajectory.crush)))
     conflicts = [f"{n} {p['pull']:+.1f} sigma" for n, p in fr.pulls().items() if p["conflict"]]
     if conflicts:
@@ -366,30 +339,13 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
             return f"its depth ({value:.3f} m) is not reached (maximum crush {crush_max:.3f} m)"
         if p.name.endswith(".depth") and sd > 0.1:
             return f"its depth is not determined (std {sd:.3f} m)"
-    evidence = BY_EFFECT[effect].evidence
-    window = effect_window_ms(fr, effect) if evidence is not None else None
+    candidate = BY_EFFECT[effect]
+    window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
     if window is not None:
-        why = evidence(fr, vehicle, window)[0]
+        why = candidate.evidence(fr, vehicle, window)[0]
         if why:
             return why
-    if effect == "rear_axle_lift":
-        from identify.candidates import neutral_values
-
-        name = "rear_axle_lift.rear_axle_stiffness"
-        if abs(fr.values[name] - neutral_values(vehicle)[name]) < 3 * fr.std[name]:
-            return "the rear axle's stiffness does not differ from the vehicle file's"
-    if effect == "engine_impact" and float(np.max(np.asarray(fr.trajectory.engine_force))) <= 0.0:
-        return "the engine never reaches the barrier in the recorded crash"
-    if effect == "rate_dependence" and fr.values["rate_dependence.rate_coefficient"] <= 0:
-        return "a negative rate coefficient (the structure softer when crushed fast) is not physical"
-    for name in _ZERO_IS_OFF.get(effect, ()):
-        if abs(fr.values[name]) < 2 * fr.std[name]:
-            return f"{name} ({fr.values[name]:.3g} +- {fr.std[name]:.2g}) does not differ from 0, where it changes nothing"
-    if effect == "stiffness_zone":
-        k0, kz = fr.values.get("k_compression", float(fr.params.k_compression)), fr.values["stiffness_zone.k_zone"]
-        if abs(kz - k0) < 2 * fr.std["stiffness_zone.k_zone"]:
-            return "the zone's stiffness does not differ from the base stiffness"
-    return ""
+    return candidate.implausible(fr, vehicle)
 
 
 def discover(

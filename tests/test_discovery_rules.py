@@ -5,7 +5,7 @@ rule inverted or removed fails a test here:
 - the BIC gate and the order of candidates (:func:`identify.discovery.choose`);
 - one effective sample count per round for every candidate (:func:`score`, :func:`round_tau`);
 - the plausibility checks of a candidate's fit (``_plausible``) and the evidence checks
-  against directly measured channels (``identify.evidence``);
+  against directly measured channels (each candidate's ``evidence``, ``identify.candidates``);
 - the held-out prediction check (``_held_out_chi2``).
 
 Accuracy of discovery on data it did not make is measured on the reference world
@@ -20,7 +20,7 @@ import pytest
 
 from identify.candidates import neutral_values
 from identify.discovery import Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score
-from identify.evidence import front_wheels_blocked
+from identify.candidates.front_wheel_block import front_wheels_blocked
 from identify.fitting import FitResult
 from identify.measurement import Measurement
 
@@ -351,3 +351,25 @@ def test_the_window_of_blocked_wheels_is_on_the_recording_clock(a4):
     t_model = np.arange(0.0, 0.12, 0.001)
     fr.trajectory = types.SimpleNamespace(t=t_model, front_blocked=((t_model >= 0.030) & (t_model <= 0.110)).astype(float))
     assert effect_window_ms(fr, "front_wheel_block") == (34.0, 100.0)
+
+
+def test_every_candidate_module_is_registered_and_discovery_names_none_of_them():
+    """The layout rule (README, Layout): a candidate is one module of identify/candidates,
+    registered by one line; discovery reaches candidates only through their hooks, so its
+    source names no effect (no ``if effect == ...`` chains)."""
+    import pkgutil
+    import re
+
+    import identify.candidates as pkg
+    import identify.discovery
+
+    modules = {m.name for m in pkgutil.iter_modules(pkg.__path__)} - {"base"}
+    assert set(pkg.REGISTRY) == modules
+    for name, c in zip(pkg.REGISTRY, pkg.CANDIDATES):
+        assert c.effect == name
+        assert c.mechanism is None or c.mechanism.effect == name
+        assert {n.split(".", 1)[1] for n in c.names} <= set(c.neutral) and all(set(s) == {n.split(".", 1)[1] for n in c.names} for s in c.starts)
+        assert set(c.report) == {n.split(".", 1)[1] for n in c.names}
+    source = open(identify.discovery.__file__).read()
+    named = [e for e in pkg.REGISTRY if re.search(rf"[\"']{e}[\"']", source)]
+    assert named == []

@@ -7,7 +7,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from identify.candidates import ENGINE_GAP_M, ENGINE_MASS_FRACTION, engine_priors, engine_typical, measured_effects
+from identify.candidates import measured_effects
+from identify.candidates.engine_impact import ENGINE_GAP_M, ENGINE_MASS_FRACTION, engine_priors, engine_typical
 from identify.discovery import _plausible
 from identify.fitting import FitResult
 from identify.identification import _second_body_notes

@@ -9,6 +9,7 @@ import pytest
 
 from sim import ConfigError, list_param_sets, list_vehicles, load_params, load_vehicle, make_params, simulate
 from sim._paths import VEHICLE_DIR
+from sim.simulate import Solver, n_samples
 from sim.vehicle import vehicle_from_dict
 
 A4_FILE = VEHICLE_DIR / "audi_a4.toml"
@@ -126,6 +127,33 @@ def test_simulate_rejects_bad_speed(a4):
     for speed in (0.0, -3.0, math.nan, 500.0):
         with pytest.raises(ConfigError, match="impact speed"):
             simulate(p, a4, speed)
+
+
+def test_simulate_speed_bounds_are_inclusive_at_100_and_cover_every_batch_member(a4, monkeypatch):
+    # The compiled run is replaced by a recorder (the checks are what is tested): 100 m/s and
+    # a tiny positive speed are accepted, one bad member of a batch is enough to refuse it,
+    # an empty batch is refused.
+    import importlib
+
+    ran = []
+    monkeypatch.setattr(importlib.import_module("sim.simulate"), "_run_jit", lambda params, vehicle, speed, n, solver: ran.append(speed))
+    p = load_params("paper_identified")
+    for speed in (100.0, 1e-3, jnp.array([1e-3, 100.0])):
+        simulate(p, a4, speed, duration=0.002)
+    assert len(ran) == 3
+    for speed in (jnp.array([10.0, -1.0]), jnp.array([10.0, 100.5]), jnp.array([10.0, math.nan]), jnp.array([])):
+        with pytest.raises(ConfigError, match="impact speed"):
+            simulate(p, a4, speed, duration=0.002)
+
+
+def test_n_samples_counts_both_ends_and_refuses_spans_outside_0_to_10_s():
+    assert n_samples(0.3) == 301
+    assert n_samples(10.0) == 10001  # the longest span accepted
+    assert n_samples(0.3, Solver(output_dt=2e-3)) == 151
+    assert n_samples(1) == 1001  # an int is a span too
+    for bad in (0.0, -0.1, 10.001, math.nan, math.inf, "0.3", None):
+        with pytest.raises(ConfigError, match="duration"):
+            n_samples(bad)
 
 
 def test_batch_validation_names_the_bad_member():

@@ -2,7 +2,9 @@
 axles carry the car's weight split by its CG position (m g b / L front, m g a / L rear) and
 hold it still; a heave of dz changes each axle's force by -k dz and a heave rate of dz/dt by
 -c dz/dt, with the vehicle file's k and c; a nose-down pitch loads the front axle and unloads
-the rear. (The smoothing of the unilateral contact is 20 N wide: negligible at these loads.)"""
+the rear; a moving, pitched car's lifts, margins, axle speeds and pitch moment agree with the
+rigid-body positions of its axle and ground points, written out in the test (virtual work).
+(The smoothing of the unilateral contact is 20 N wide: negligible at these loads.)"""
 
 import jax.numpy as jnp
 import numpy as np
@@ -68,3 +70,54 @@ def test_blocked_front_tyres_slide_on_the_stribeck_curve_and_the_rear_ones_roll(
     assert float(force[0]) == pytest.approx(expected, rel=1e-9, abs=1e-9)
     if speed > 0:
         assert float(force[0]) < -rr * float(np.sum(normal)) * sign  # more than rolling alone
+
+
+def body_point(q, px, pz):
+    """World (X, Z) of the body point (px, pz) (m, from the CG, body axes) when the CG is at
+    (x, z) and the body pitched by theta nose down: the rotation written out, apart from
+    sim/ground.py's expressions."""
+    x, z, theta = q
+    rot = np.array([[np.cos(theta), np.sin(theta)], [-np.sin(theta), np.cos(theta)]])
+    return np.array([x, z]) + rot @ np.array([px, pz])
+
+
+def rate(f, q, v, h=1e-7):
+    """d f(q(t)) / dt along the velocity v, by a central difference."""
+    q, v = np.asarray(q, float), np.asarray(v, float)
+    return (f(q + h * v) - f(q - h * v)) / (2 * h)
+
+
+@pytest.mark.parametrize("lifted", [0, 1])  # which axle is off the ground: front, rear
+def test_axle_geometry_and_the_virtual_work_of_the_one_axle_on_the_ground(a4, lifted):
+    """A moving, rising, pitched car with one wheel pair in the air. Against the rigid-body
+    positions of the axle points (px, r - h) and of the ground points below them (px, -h):
+    each axle's lift is its rise above the height where its wheel just touches, its contact
+    margin k (delta0 - rise) - c d(rise)/dt, its horizontal speed that of its axle point; the
+    axle that touches carries the whole generalised force of the ground, so the pitch moment
+    is its normal force times dZ/dtheta of its axle point plus its tyre force times
+    dX/dtheta of its ground point (virtual work), and the tyre force is the whole x force."""
+    theta = 0.08 if lifted == 1 else -0.08  # nose down lifts the rear, nose up the front
+    q = np.array([0.3, 0.02, theta])
+    v = np.array([6.0, 0.4, 3.0 if lifted == 1 else -3.0])
+    force, normal, margin, lift, axle_speed = (np.asarray(o) for o in ground_forces(
+        jnp.asarray(q), jnp.asarray(v), a4, PARAMS, jnp.asarray(1.0), Solver()))
+    a, b = float(a4.cg_to_front_axle), float(a4.cg_to_rear_axle)
+    h, r = float(a4.cg_height), float(a4.wheel_radius)
+    k, c = np.asarray(a4.axle_stiffness), np.asarray(a4.axle_damping)
+    delta0 = np.asarray(a4.static_axle_loads) / k
+    on = 1 - lifted
+    for i, px in enumerate((a, -b)):
+        axle = lambda qq, px=px: body_point(qq, px, r - h)  # noqa: E731
+        rise = axle(q)[1] - axle(np.zeros(3))[1]
+        assert margin[i] == pytest.approx(k[i] * (delta0[i] - rise) - c[i] * rate(axle, q, v)[1], rel=1e-6)
+        assert lift[i] == pytest.approx(max(rise - delta0[i], 0.0), abs=1e-9)
+        assert axle_speed[i] == pytest.approx(rate(axle, q, v)[0], rel=1e-6)
+    assert lift[lifted] > 0.01 and lift[on] == 0.0 and normal[lifted] < 1e-6 * normal[on]
+    px = (a, -b)[on]
+    d_dtheta = lambda f: (f(q + [0, 0, 1e-7]) - f(q - [0, 0, 1e-7])) / 2e-7  # noqa: E731
+    dz_axle = d_dtheta(lambda qq: body_point(qq, px, r - h))[1]
+    dx_ground = d_dtheta(lambda qq: body_point(qq, px, -h))[0]
+    tyre = force[0]
+    assert tyre < 0.0  # moving forward: the tyre pushes back
+    assert force[2] == pytest.approx(normal[on] * dz_axle + tyre * dx_ground, rel=1e-6)
+    assert force[1] == pytest.approx(normal[on] - float(a4.mass) * GRAVITY, rel=1e-9)

@@ -3,6 +3,7 @@
     python -m pip install -e ".[test,mutation]"
     python tools/mutation_score.py            # mutmut run, then the table and the survivors
     python tools/mutation_score.py --report   # only the table of the last run
+    python tools/mutation_score.py --only 'sim.simulate*'   # one module's mutants (glob)
 
 ``mutmut`` (configured in pyproject.toml's ``[tool.mutmut]``: which files, which tests)
 copies the project to ``mutants/``, makes every small change it knows to each line the
@@ -24,6 +25,7 @@ first pass every selected test is mapped to every function of the jit-compiled m
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import subprocess
 import sys
@@ -84,15 +86,18 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--report", action="store_true", help="only print the last run's table")
     ap.add_argument("--max-children", type=int, default=2, help="mutants run at once (default 2: the 2 cores)")
+    ap.add_argument("--only", nargs="+", default=[], metavar="GLOB",
+                    help="run only the mutants whose names match, e.g. 'sim.simulate*' (default: all)")
     args = ap.parse_args(argv)
     if not args.report:
         run = [sys.executable, "-m", "mutmut", "run", "--max-children", str(args.max_children)]
         try:
-            subprocess.run(run, cwd=ROOT, check=False)
+            subprocess.run(run + args.only, cwd=ROOT, check=False)
         except FileNotFoundError:
             print("mutmut is not installed: python -m pip install -e '.[test,mutation]'", file=sys.stderr)
             return 2
-        again = survivors_of(read_results(ROOT / "mutants"))
+        again = [k for k in survivors_of(read_results(ROOT / "mutants"))
+                 if not args.only or any(fnmatch.fnmatch(k, g) for g in args.only)]
         if again:
             n = widen_test_map(ROOT / "mutants" / "mutmut-stats.json")
             print(f"second pass: {len(again)} survivors of the jit-compiled modules against every selected test"

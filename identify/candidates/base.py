@@ -1,0 +1,117 @@
+"""What a candidate mechanism is to discovery, and the rules several candidates share.
+
+A candidate is one module of this package defining ``CANDIDATE = Candidate(...)``: the
+``sim.mechanisms`` class with its equation and explanation, its free parameters with their
+transforms, the values that switch it off, its starting guesses, what it implies for the
+channels a recording measures directly (its evidence check), where it acts in a fitted
+model and the rules that refuse a fit of it as implausible. ``identify.candidates`` lists
+the modules (one line each); ``identify.discovery`` calls only these hooks, never a
+candidate by name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import jax.numpy as jnp
+import numpy as np
+
+from identify.model import FreeParameter
+
+NEVER_REACHED = 10.0  # m: a depth the crush never reaches (the mechanism stays off)
+DECISIVE_CHI2 = 9.0  # a chi-square difference of 9: three standard deviations
+
+
+class _UnitArea:
+    """Stands in for a Vehicle in mechanism hooks evaluated per unit contact area."""
+
+    contact_area = 1.0
+
+
+def loading_force_differs(fr, mechanism) -> np.ndarray:
+    """Output samples of fit ``fr`` where ``mechanism`` changes the loading force from the base
+    law k_compression * crush by more than 2 % of its largest change (loading only): the
+    default of :attr:`Candidate.active`."""
+    tr = fr.trajectory
+    crush = np.asarray(tr.crush)
+    rate = np.gradient(crush, np.asarray(tr.t))
+    loading = (crush >= np.asarray(tr.crush_max) - 1e-9) & (rate > 0)
+    f0 = float(fr.params.k_compression) * crush  # N/m^2: the base law per unit contact area
+    extra = np.asarray(mechanism.loading_force(jnp.asarray(f0), jnp.asarray(crush), jnp.asarray(rate),
+                                               fr.params, _UnitArea())) - f0
+    extra = np.where(loading, np.abs(extra), 0.0)
+    return extra > 0.02 * extra.max() if extra.max() > 0 else np.zeros_like(extra, bool)
+
+
+def differs_from_zero(fr, name: str) -> str:
+    """'' when parameter ``name``, whose value 0 switches its mechanism off, differs from 0 by
+    2 standard deviations, else why not: a fit that cannot tell it from 0 has not found the
+    mechanism (it has spent a parameter on a combination the others already fix)."""
+    value, sd = fr.values[name], fr.std[name]
+    if abs(value) < 2 * sd:
+        return f"{name} ({value:.3g} +- {sd:.2g}) does not differ from 0, where it changes nothing"
+    return ""
+
+
+def _no_rule(fr, vehicle) -> str:
+    return ""
+
+
+@dataclasses.dataclass(frozen=True)
+class Candidate:
+    """One candidate mechanism.
+
+    effect : effect name (``docs/interface.md``), the mechanism's ``effect``.
+    mechanism : the sim mechanism class, or None for a candidate that changes the vehicle
+        (``identify.model.VEHICLE_OVERRIDES``).
+    parameters : its fitted fields, as FreeParameter named ``effect.field``.
+    neutral : field -> value that switches the mechanism off (physical units), or
+        ``"vehicle"``: the vehicle file's own value.
+    starts : starting guesses, each field -> a value or a rule ``(fit, vehicle, analysis) ->
+        value`` (``fit`` the current model's FitResult, or None before any fit; ``analysis``
+        its ``identify.residuals.ResidualAnalysis``, or None).
+    report : field -> name of the parameter in the discovery's report (``depth_m``).
+    text : the one-sentence explanation when there is no mechanism class.
+    priors : callable(vehicle) -> {``effect.field``: (value, sigma)}: what is known of its
+        parameters before any fit (``identify.fitting.fit``'s ``priors``), or None.
+    evidence : callable(fit, vehicle, window_ms) -> (reason, evidence) checking what the
+        mechanism implies for a channel measured directly against what that channel shows:
+        ``reason`` '' when the candidate may stand, else why not; ``evidence`` one line for
+        the report ("seen: ...", "inferred, not seen: ..."). None: no channel shows it.
+    active : callable(fit) -> bool per output sample of ``fit.trajectory``: where the fitted
+        mechanism acts; None: where it changes the loading force (:func:`loading_force_differs`).
+    implausible : callable(fit, vehicle) -> '' or why a fit of this candidate is not a
+        finding, beyond the rules every candidate meets (``identify.discovery``).
+    """
+
+    effect: str
+    mechanism: type | None
+    parameters: tuple[FreeParameter, ...]
+    neutral: dict[str, float | str]
+    starts: tuple[dict[str, float | Callable], ...]
+    report: dict[str, str]
+    text: str = ""
+    priors: Callable | None = None
+    evidence: Callable | None = None
+    active: Callable | None = None
+    implausible: Callable = _no_rule
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.parameters)
+
+    @property
+    def explanation(self) -> str:
+        return self.mechanism.explanation if self.mechanism is not None else self.text
+
+    def acting(self, fr) -> np.ndarray:
+        """Bool per output sample of ``fr.trajectory``: where the fitted mechanism acts."""
+        if self.active is not None:
+            return np.asarray(self.active(fr), bool)
+        return loading_force_differs(fr, next(m for m in fr.params.mechanisms if m.effect == self.effect))
+
+
+def parameter(effect: str, field: str, unit: str, transform: str, **kw) -> FreeParameter:
+    """The candidate's free parameter ``effect.field`` (``identify.model.FreeParameter``)."""
+    return FreeParameter(f"{effect}.{field}", unit, transform, **kw)

@@ -1,0 +1,62 @@
+"""The engine as a second mass that reaches the barrier after a gap (``sim.mechanisms.EngineImpact``),
+shared with the two-body base model when a recording measures the engine's own motion.
+What is known of it before a fit (its mass; its gap when the vehicle file gives one) enters
+as priors; it is no finding when the engine never reaches the barrier in the recorded crash.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from identify.candidates.base import NEVER_REACHED, Candidate, parameter
+from sim import EngineImpact
+
+ENGINE_MASS_FRACTION = 0.13  # of the test mass, when the vehicle file gives no engine_mass
+ENGINE_GAP_M = 0.35  # m, when the vehicle file gives no engine_gap
+ENGINE_MASS_REL_SIGMA = 0.3
+ENGINE_GAP_SIGMA_M = 0.1
+
+
+def engine_typical(vehicle) -> dict[str, float]:
+    """Where the engine fit starts: the vehicle file's engine mass and gap, else 13 % of the
+    mass and 0.35 m."""
+    mass = vehicle.engine_mass if vehicle.engine_mass is not None else ENGINE_MASS_FRACTION * float(vehicle.mass)
+    gap = vehicle.engine_gap if vehicle.engine_gap is not None else ENGINE_GAP_M
+    return {"engine_impact.engine_mass": float(mass), "engine_impact.gap": float(gap)}
+
+
+def engine_priors(vehicle) -> dict[str, tuple[float, float]]:
+    """What is known of the engine before the fit (``data/README.md``): its mass, the vehicle
+    file's or else 13 % of the car's (engines and gearboxes weigh 10-20 %), +-30 %; its gap
+    only when the vehicle file states it (+-0.1 m). A typical gap is no measurement: it would
+    pull the fit of a car whose engine never reaches the barrier towards one that does."""
+    typical = engine_typical(vehicle)
+    mass = typical["engine_impact.engine_mass"]
+    out = {"engine_impact.engine_mass": (mass, ENGINE_MASS_REL_SIGMA * mass)}
+    if vehicle.engine_gap is not None:
+        out["engine_impact.gap"] = (float(vehicle.engine_gap), ENGINE_GAP_SIGMA_M)
+    return out
+
+
+def never_reaches_the_barrier(fr, vehicle) -> str:
+    if float(np.max(np.asarray(fr.trajectory.engine_force))) <= 0.0:
+        return "the engine never reaches the barrier in the recorded crash"
+    return ""
+
+
+CANDIDATE = Candidate(
+    "engine_impact", EngineImpact,
+    (parameter("engine_impact", "engine_mass", "kg", "logit", lower=20.0, upper=700.0),
+     parameter("engine_impact", "gap", "m", "logit", lower=0.05, upper=1.2),
+     parameter("engine_impact", "k_engine", "N/m", "log", scale=1e6),
+     parameter("engine_impact", "k_rear", "N/m", "log", scale=1e6)),
+    {"engine_mass": 0.0, "gap": NEVER_REACHED, "k_engine": 3e6, "k_rear": 1e6, "restitution_engine": 0.1,
+     "mount_stiffness": 8e5, "mount_break_force": 5e4},
+    ({"engine_mass": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.engine_mass"],
+      "gap": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.gap"],
+      "k_engine": 3e6, "k_rear": 1e6},),
+    {"engine_mass": "engine_mass_kg", "gap": "gap_m", "k_engine": "k_engine_N_per_m",
+     "k_rear": "k_rear_N_per_m"},
+    priors=engine_priors,
+    implausible=never_reaches_the_barrier,
+)

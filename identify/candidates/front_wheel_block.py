@@ -1,0 +1,78 @@
+"""Front wheels blocked by the crushed structure (``sim.mechanisms.FrontWheelBlock``).
+
+Evidence: blocked front wheels stand still while the car moves; rolling ones turn by the
+body's displacement over the wheel radius. Where the recording measures the front hub's
+angle the claim is set against it; a blocking window where the car barely moves (around
+maximum crush) is no finding, since no channel can check it there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from identify.candidates.base import DECISIVE_CHI2, NEVER_REACHED, Candidate, parameter
+from sim import FrontWheelBlock
+
+FRONT_ANGLE = "front_wheel_angle_rad"
+
+
+def wheels_stop_turning(fr, vehicle, analysis) -> float:
+    """Starting depth (m): the current model's crush where the strongest misfit window of the
+    front wheel angle starts (the wheels stop turning there), else where the crush reaches
+    the tyre (front overhang minus wheel radius)."""
+    from identify.residuals import model_crush
+
+    depth = float(vehicle.front_overhang - vehicle.wheel_radius)
+    windows = [w for w in (analysis.windows if analysis is not None else [])
+               if w.channel == FRONT_ANGLE and w.start_ms > 0]
+    if windows and fr is not None:
+        crush = float(model_crush(fr, np.array([windows[0].start_ms / 1e3]))[0])
+        if crush > 0.05:
+            depth = crush
+    return depth
+
+
+def front_wheels_blocked(fr, vehicle, window_ms) -> tuple[str, str]:
+    """The measured front wheel angle in the window set against standing still and against
+    rolling (each with its own constant offset, fitted): the claim stands only when the two
+    differ by more than ``DECISIVE_CHI2`` over the window (else no channel can check it) and
+    standing still does not fit worse than rolling by more than that.
+    """
+    m = fr.measurement
+    t_ms = np.asarray(m.t) * 1e3
+    inside = (t_ms >= window_ms[0]) & (t_ms <= window_ms[1])
+    span = f"{window_ms[0]:.0f}-{window_ms[1]:.0f} ms"
+    ok = inside & m.valid(FRONT_ANGLE) if FRONT_ANGLE in m.channels else np.zeros_like(inside)
+    if ok.sum() < 3:
+        return "", f"inferred, not seen: the recording does not show the front wheels in {span}"
+    sigma = np.asarray(m.sigma[FRONT_ANGLE])[ok]
+    rolling = np.asarray(fr.predictions["x_m"])[ok] / float(vehicle.wheel_radius)  # rad, up to a constant
+    angle = np.asarray(m.channels[FRONT_ANGLE])[ok]
+
+    def chi2_about_a_constant(r):
+        w = 1.0 / sigma**2
+        return float(np.sum(w * (r - np.sum(w * r) / np.sum(w)) ** 2))
+
+    separable = chi2_about_a_constant(rolling)  # what telling rolling from blocked is worth here
+    if separable < DECISIVE_CHI2:
+        return (f"the front wheels would be blocked only where the car barely moves ({span}): rolling would turn "
+                f"them by {np.ptp(rolling):.3f} rad, which the hub angle (sigma {np.median(sigma):.3f} rad) cannot "
+                "tell from standing still, so no channel can check it"), ""
+    blocked, turning = chi2_about_a_constant(angle), chi2_about_a_constant(angle - rolling)
+    if blocked - turning > DECISIVE_CHI2:
+        return (f"the recording shows the front wheels turning in {span} (turned {np.ptp(angle):.2f} rad; rolling "
+                f"{np.ptp(rolling):.2f} rad), where the candidate has them blocked (chi2 {blocked:.0f} standing "
+                f"against {turning:.0f} rolling)"), ""
+    return "", (f"seen: the front hub angle stands still in {span} (chi2 {blocked:.0f} standing against "
+                f"{turning:.0f} rolling, over {int(ok.sum())} samples)")
+
+
+CANDIDATE = Candidate(
+    "front_wheel_block", FrontWheelBlock,
+    (parameter("front_wheel_block", "depth", "m", "logit", lower=0.05, upper=1.2),),
+    {"depth": NEVER_REACHED},
+    ({"depth": wheels_stop_turning},),
+    {"depth": "depth_m"},
+    evidence=front_wheels_blocked,
+    active=lambda fr: np.asarray(fr.trajectory.front_blocked) > 0.5,
+)
