@@ -52,6 +52,7 @@ from identify.candidates import (
 )
 from identify.errors import UserError
 from identify.fitting import FitOptions, FitResult, fit
+from identify.model import NUISANCE
 from identify.residuals import ResidualAnalysis, analyse, channel_chi2, model_crush, phase_at, phase_times_ms
 
 
@@ -325,7 +326,9 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     and the data fix; then its own evidence check over the window where it acts and its own
     rules (``Candidate.evidence``, ``Candidate.implausible``)."""
     crush_max = float(np.max(np.asarray(fr.trajectory.crush)))
-    conflicts = [f"{n} {p['pull']:+.1f} sigma" for n, p in fr.pulls().items() if p["conflict"]]
+    # the measured nuisances' pulls (speed, contact) are the final model's to report; here
+    # the priors of what the model is made of (an engine's mass and gap)
+    conflicts = [f"{n} {p['pull']:+.1f} sigma" for n, p in fr.pulls().items() if p["conflict"] and n not in NUISANCE]
     if conflicts:
         return ("its fit pulls what was known before the fit beyond 3 sigma (" + ", ".join(conflicts) +
                 "): it trades against the prior rather than explaining the misfit")

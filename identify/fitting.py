@@ -124,7 +124,7 @@ class FitResult:
         self.identified[name] = (False, reason if ok else f"{before}; and {reason.removeprefix('not identified: ')}")
 
     def pulls(self) -> dict[str, dict]:
-        """name -> {prior, prior_std, value, std, pull, conflict} for each fitted quantity
+        """name -> {prior, prior_std, value, std, unit, pull, conflict} for each fitted quantity
         that had a prior: pull = (fitted - prior) / prior sigma; beyond ``PULL_CONFLICT``
         sigma the model and the recording disagree with the prior knowledge."""
         out = {}
@@ -132,7 +132,8 @@ class FitResult:
             if name in self.values:
                 pull = (self.values[name] - mu) / sigma
                 out[name] = {"prior": mu, "prior_std": sigma, "value": self.values[name], "std": self.std[name],
-                             "pull": pull, "conflict": bool(abs(pull) > self.PULL_CONFLICT)}
+                             "unit": self.units.get(name, ""), "pull": pull,
+                             "conflict": bool(abs(pull) > self.PULL_CONFLICT)}
         return out
 
     @property
@@ -204,10 +205,9 @@ def _residual_fn(spec, channels, n_out, solver):
     """Build r(u, data) -> (m,) weighted residuals (pure, jit-able)."""
 
     def residuals(u, data):
-        _, preds, speed = model_on_clock(_values(spec, u, data), data, channels, n_out, solver)
+        _, preds, _ = model_on_clock(_values(spec, u, data), data, channels, n_out, solver)
         out = [channel_residuals(pred, data["y"][c], data["w"][c], name in OFFSET_FREE)
                for c, (name, pred) in enumerate(zip(channels, preds))]
-        out.append(jnp.atleast_1d(prior_residuals(speed, data["speed_prior"], data["speed_prior_w"])))
         values = _values(spec, u, data)
         out.append(prior_residuals(jnp.stack([values[p.name] for p in spec]), data["prior_mu"], data["prior_w"]))
         return jnp.concatenate(out)
@@ -326,8 +326,15 @@ def fit(
         "contact_time": 0.0,
         **(initial or {}),
     }
-    measured_prior = speed_mps is None and measurement.impact_speed_sigma
     priors = dict(priors or {})
+    # the recording's own measurements of the nuisances are priors like any other, so their
+    # pulls are reported (FitResult.pulls): the measured impact speed (header, approach
+    # frames) and first contact when measured apart from the fitted channels (load cells)
+    names = {p.name for p in free} - set(held)
+    if speed_mps is None and measurement.impact_speed_sigma and "impact_speed" in names:
+        priors.setdefault("impact_speed", (float(speed_guess), float(measurement.impact_speed_sigma)))
+    if measurement.contact_time_sigma and "contact_time" in names:
+        priors.setdefault("contact_time", (0.0, float(measurement.contact_time_sigma)))
     data = dict(
         t=jnp.asarray(measurement.t),
         y=jnp.asarray(y),
@@ -335,8 +342,6 @@ def fit(
         template=template,
         vehicle=vehicle,
         speed_guess=jnp.asarray(float(speed_guess)),
-        speed_prior=jnp.asarray(float(speed_guess)),
-        speed_prior_w=jnp.asarray(1.0 / measurement.impact_speed_sigma if measured_prior else 0.0),
         mask=jnp.asarray([0.0 if p.name in held else 1.0 for p in free]),
         held=jnp.asarray([float(held.get(p.name, 0.0)) for p in free]),
         prior_mu=jnp.asarray([float(priors[p.name][0]) if p.name in priors else 0.0 for p in free]),
@@ -369,7 +374,7 @@ def fit(
     fitted = [i for i, p in enumerate(free) if p.name not in held]
     jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
     spec_all, free = free, tuple(free[i] for i in fitted)
-    n_res = int(np.sum(w > 0)) + (1 if measured_prior else 0) + int(np.count_nonzero(np.asarray(data["prior_w"])))
+    n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
     n = len(measurement.t)
     rows = {name: c * n + np.flatnonzero(w[c] > 0) for c, name in enumerate(channels)}
     unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), rows, n_res)

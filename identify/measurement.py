@@ -55,6 +55,9 @@ class Measurement:
     sigma : name -> (n,) one-sigma uncertainty (same unit); NaN where not measured.
     impact_speed_mps : measured impact speed, or None.
     impact_speed_sigma : its one-sigma uncertainty (m/s), or None.
+    contact_time_sigma : s, one-sigma uncertainty of t = 0 as the instant of first contact
+        when the recording measures it apart from the fitted channels (a barrier's load
+        cells), or None (t = 0 found from the fitted motion itself).
     source : what the recording was (a file name), for reports.
     events_ms : events seen in the recording (e.g. ``front_wheel_block``), ms after contact.
     notes : things a person should read about the recording.
@@ -68,6 +71,7 @@ class Measurement:
     sigma: dict[str, np.ndarray]
     impact_speed_mps: float | None = None
     impact_speed_sigma: float | None = None
+    contact_time_sigma: float | None = None
     source: str = ""
     events_ms: dict[str, float] = dataclasses.field(default_factory=dict)
     notes: tuple[str, ...] = ()
@@ -90,6 +94,10 @@ class Measurement:
             math.isfinite(self.impact_speed_mps) and self.impact_speed_mps > 0
         ):
             raise UserError(f"{self.source or 'measurement'}: impact speed must be > 0 m/s")
+        if self.contact_time_sigma is not None and not (
+            math.isfinite(self.contact_time_sigma) and self.contact_time_sigma > 0
+        ):
+            raise UserError(f"{self.source or 'measurement'}: the contact time's sigma must be > 0 s")
         object.__setattr__(self, "t", t)
 
     @property

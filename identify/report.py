@@ -10,6 +10,27 @@ PARAMETER_ROWS = (
 )
 
 
+# what a prior is, in the reader's units: the recording's measurements of the nuisances
+MEASURED = {"impact_speed": ("impact speed", 3.6, "km/h"), "contact_time": ("first contact", 1e3, "ms")}
+
+
+def prior_lines(priors: dict) -> list[str]:
+    """One line per quantity known before the fit (``result.json``'s ``priors``): what was
+    known, what the fit made of it and the pull (fitted - known) / sigma; the recording's
+    own measurements (speed, contact) first, then the other priors (an engine's mass from
+    the vehicle file)."""
+    out = []
+    for name in sorted(priors, key=lambda n: (n not in MEASURED, n)):
+        p = priors[name]
+        label, scale, unit = MEASURED.get(name, (name, 1.0, p.get("unit", "")))
+        u = f" {unit}" if unit else ""
+        source = "measured" if name in MEASURED else "prior"
+        flag = " **conflict: model and recording disagree**" if p["conflict"] else ""
+        out.append(f"{label}: {source} {p['prior'] * scale:.4g} +- {p['prior_std'] * scale:.2g}{u}, fitted"
+                   f" {p['value'] * scale:.4g} +- {p['std'] * scale:.2g}{u} (pull {p['pull']:+.1f} sigma){flag}")
+    return out
+
+
 def _fmt(value, scale, digits=3):
     if value is None:
         return "-"
@@ -57,6 +78,9 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
             f"| {label} | {_fmt(defaults.get(name), scale)}{u} | {_fmt(p['value'], scale, 4)}{u} |"
             f" {_fmt(p.get('std'), scale, 2)}{u} | {status} |"
         )
+    known = prior_lines(doc.get("priors") or {})
+    if known:
+        lines += ["", "## What was known before the fit", ""] + [f"- {k}" for k in known]
     lines += ["", "Strongest correlations between fitted parameters:", ""]
     corr = doc.get("correlation", {})
     names = corr.get("names", [])

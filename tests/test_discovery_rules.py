@@ -102,6 +102,7 @@ class FakeFit:
     params: object = None
     contact_time: float = 0.0
     at_bound: dict = dataclasses.field(default_factory=dict)
+    units: dict = dataclasses.field(default_factory=dict)
     PULL_CONFLICT = FitResult.PULL_CONFLICT
     pulls = FitResult.pulls
 

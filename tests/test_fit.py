@@ -189,3 +189,29 @@ def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_m
     assert "contact_time" in r.at_bound and "bound" in r.at_bound["contact_time"]
     ok, reason = r.identified["contact_time"]
     assert not ok and "where the fit stopped it" in reason
+
+
+def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, paper_measurement, paper_fit):
+    """A recording that measures first contact apart from the motion (load cells) gives t = 0
+    a sigma: the fit's contact time is then a measurement's, with its pull reported, and a
+    contact 5 ms off against a 1 ms sigma is a conflict between model and recording. The
+    measured impact speed (one sigma off in the synthetic recording) is reported the same way."""
+    speed = paper_fit.pulls()["impact_speed"]
+    assert speed["prior"] == pytest.approx(paper_measurement.impact_speed_mps)
+    assert abs(speed["pull"]) < 3 and not speed["conflict"]
+    assert "contact_time" not in paper_fit.pulls()  # no independent measurement of contact: no prior
+    # the synthetic recording's t = 0 is 5 ms before the model's contact; its load cells are
+    # said to put contact at t = 0 +- 1 ms
+    off = dataclasses.replace(synthetic_measurement(a4, named_params("paper_identified"), contact_time=0.005),
+                              contact_time_sigma=0.001)
+    r = fit(off, a4)
+    pull = r.pulls()["contact_time"]
+    assert pull["prior"] == 0.0 and pull["prior_std"] == 0.001
+    assert pull["conflict"] and pull["pull"] == pytest.approx(r.values["contact_time"] / 0.001)
+    assert 0.004 < r.values["contact_time"] < 0.0055  # the motion still decides (4.4 ms measured)
+    # the report and the console say it in the reader's units, the measurements first
+    from identify.report import prior_lines
+
+    lines = prior_lines(r.pulls())
+    assert lines[0].startswith("first contact: measured 0 +- 1 ms, fitted 4.") and "conflict" in lines[0]
+    assert lines[1].startswith("impact speed: measured") and "km/h" in lines[1] and "conflict" not in lines[1]

@@ -80,7 +80,7 @@ def test_channel_selection(test10146):
 def _contact_ms(m):
     """The Measurement's first contact (recording time, ms), as its note reports it."""
     note = next(n for n in m.notes if n.startswith("first contact"))
-    return float(note.split(" at ")[1].split(" ms")[0])
+    return float(note.split(" at ")[1].split(" ")[0])
 
 
 def test_crush_and_timing_of_10146(motion, raw):
@@ -129,10 +129,12 @@ def test_measurement_shape_and_sigma(motion, test10146):
 
 
 def test_contact_time_from_barrier_force_matches_nhtsa_time_zero(motion):
-    # NHTSA's time zero is the contact switch; the summed force starts within a ms of it
+    # NHTSA's time zero is the contact switch; the summed force starts within a ms of it,
+    # and within the onset's own sigma (3.1 ms: the force climbs slowly out of the noise)
+    ms = _contact_ms(motion)
+    assert abs(ms) < 1.0 and abs(ms) < motion.contact_time_sigma * 1e3
     note = next(n for n in motion.notes if n.startswith("first contact"))
-    ms = float(note.split(" at ")[1].split(" ms")[0])
-    assert abs(ms) < 1.0
+    assert f"+- {motion.contact_time_sigma * 1e3:.2f} ms" in note
 
 
 def test_contact_from_vehicle_pulse_alone_lags_the_bumper(tmp_path, raw):
@@ -142,6 +144,8 @@ def test_contact_from_vehicle_pulse_alone_lags_the_bumper(tmp_path, raw):
     note = next(n for n in m.notes if n.startswith("first contact"))
     ms = _contact_ms(m)
     assert 1.0 < ms < 6.0 and "vehicle deceleration" in note
+    # contact from the same accelerometers the fit sees: no independent measurement, no sigma
+    assert m.contact_time_sigma is None
     # The later zero loses the bumper's first centimetres of crush: the raw integration
     # started at that time (3.1 ms, the nearest sample) gives 0.69195 m, the program
     # 0.69191 m (1 mm as in test_crush_and_timing_of_10146) ...

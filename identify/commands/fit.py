@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from identify.errors import UserError
+from identify.report import prior_lines
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -86,6 +87,8 @@ def _run(args: argparse.Namespace, folder) -> int:
         std = f" +- {p['std']:.3g}" if p.get("std") is not None else ""
         flag = "" if p.get("identified", True) else f"   ({p['reason']})"
         print(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
+    for line in prior_lines(doc.get("priors") or {}):
+        print(f"  {line}")
     for warning in doc.get("warnings") or []:
         print(f"warning: {warning}", file=sys.stderr)
     print(f"results: {ident.out}")
