@@ -384,14 +384,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         doc["fit"]["starts_of"] = "base model"
     if engine_doubt:
         warnings.append(engine_doubt)
-    for name, where in fr.at_bound.items():
-        warnings.append(f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the fit's"
-                        " range, not the recording, set it (the model may be trading it against what it cannot explain)")
-    for name, p in doc["priors"].items():
-        if p["conflict"]:
-            warnings.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"
-                            f" the fit ({p['prior']:.4g} +- {p['prior_std']:.2g}): the model and the recording"
-                            " disagree there")
+    warnings += fit_warnings(fr)
     if warnings:
         doc["warnings"] = list(warnings)
     ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh, discovery=found, one_body=one_body)
@@ -400,6 +393,22 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         default_traj = simulate(named_params("vsim_default"), veh, fr.speed, duration=float(fr.measurement.t.max()) + 0.001)
         ident.out = write_results(folder, ident, default_traj)
     return ident
+
+
+def fit_warnings(fr) -> list[str]:
+    """What the user must be told of fit ``fr`` before its numbers: every fitted quantity a
+    bound stopped (not identified: the fit's range set it), and every quantity pulled beyond
+    ``FitResult.PULL_CONFLICT`` sigma from what was known before the fit (a measured speed or
+    contact, a vehicle file's engine mass): the model and the recording disagree there."""
+    out = [f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the fit's range, not"
+           " the recording, set it (the model may be trading it against what it cannot explain)"
+           for name, where in fr.at_bound.items()]
+    for name, p in fr.pulls().items():
+        if p["conflict"]:
+            out.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"
+                       f" the fit ({p['prior']:.4g} +- {p['prior_std']:.2g} {p['unit']}): the model and the recording"
+                       " disagree there")
+    return out
 
 
 def _second_body_notes(fr, recording) -> list[str]:

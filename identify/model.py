@@ -166,6 +166,16 @@ def _hermite(values, slopes, s, h):
     return (2 * u3 - 3 * u2 + 1) * y0 + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * y1 + (u3 - u2) * m1
 
 
+def _smooth(values, s, h):
+    """Cubic Hermite interpolation of samples ``values`` (spacing h, first at s = 0) whose
+    slopes are their centred differences (one-sided at the ends): smooth in ``s``, where
+    linear interpolation has a kink at every sample, so that a fitted time shift is not drawn
+    to a multiple of the model's output interval."""
+    inner = (values[2:] - values[:-2]) / (2 * h)
+    slopes = jnp.concatenate([(values[1:2] - values[:1]) / h, inner, (values[-1:] - values[-2:-1]) / h])
+    return _hermite(values, slopes, s, h)
+
+
 def _linear(values, s, h):
     n = values.shape[0]
     pos = jnp.clip(s / h, 0.0, n - 1.000001)
@@ -193,11 +203,11 @@ def predict(traj, channel: str, t, speed, contact_time, wheel_radius, h: float):
             after = _hermite(traj.x, traj.vx, s_, h)
             return jnp.where(before, speed * s_, after)
         if channel == "vx_mps":
-            return jnp.where(before, speed, _linear(traj.vx, s_, h))
+            return jnp.where(before, speed, _smooth(traj.vx, s_, h))
         if channel == "engine_x_m":
             return jnp.where(before, speed * s_, _hermite(traj.engine_x, traj.engine_vx, s_, h))
         if channel == "engine_vx_mps":
-            return jnp.where(before, speed, _linear(traj.engine_vx, s_, h))
+            return jnp.where(before, speed, _smooth(traj.engine_vx, s_, h))
         if channel == "z_m":
             return jnp.where(before, 0.0, _hermite(traj.z, traj.vz, s_, h))
         if channel == "pitch_rad":

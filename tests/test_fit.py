@@ -189,6 +189,10 @@ def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_m
     assert "contact_time" in r.at_bound and "bound" in r.at_bound["contact_time"]
     ok, reason = r.identified["contact_time"]
     assert not ok and "where the fit stopped it" in reason
+    from identify.identification import fit_warnings
+
+    assert any(w.startswith("contact_time ended at its ") and "bound" in w and "the fit's range, not the recording" in w
+               for w in fit_warnings(r))
 
 
 def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, paper_measurement, paper_fit):
@@ -215,3 +219,9 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
     lines = prior_lines(r.pulls())
     assert lines[0].startswith("first contact: measured 0 +- 1 ms, fitted 4.") and "conflict" in lines[0]
     assert lines[1].startswith("impact speed: measured") and "km/h" in lines[1] and "conflict" not in lines[1]
+    # and the result's warnings say it before any number
+    from identify.identification import fit_warnings
+
+    warned = fit_warnings(r)
+    assert len(warned) == 1 and warned[0].startswith("contact_time fitted at 0.004") and "disagree there" in warned[0]
+    assert fit_warnings(paper_fit) == []
