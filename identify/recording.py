@@ -22,8 +22,8 @@ import numpy as np
 
 from identify.errors import UserError
 from identify.measurement import KNOWN_CHANNELS, Measurement, measurement_from_tracks_csv
+from video.io import VIDEO_SUFFIXES  # the one list of film formats the video stage opens
 
-VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".wmv"}
 
 
 @dataclasses.dataclass

@@ -310,3 +310,14 @@ def test_an_internal_error_is_one_line_exit_1_not_a_traceback(monkeypatch, capfd
     err = capfd.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1
     assert "unexpected ZeroDivisionError" in err[0] and "a bug" in err[0] and "Traceback" not in err[0]
+
+
+@pytest.mark.parametrize("suffix", [".webm", ".WMV"])
+def test_fit_opens_every_film_format_the_video_stage_opens(tmp_path, capfd, suffix):
+    """One list of film formats (video.io.VIDEO_SUFFIXES): ``fit`` hands a .webm to the video
+    stage like ``frames`` does, and a damaged one is the video stage's one line, not 'not a
+    recording this tool reads'."""
+    bad = tmp_path / f"bad{suffix}"
+    bad.write_bytes(b"\x1a\x45\xdf\xa3 not a webm file" * 100)
+    code = main(["fit", str(bad), "--vehicle", "audi_a4", "--out", str(tmp_path / "o"), "--quiet"])
+    one_line(capfd, code, "cannot open video")
