@@ -38,6 +38,8 @@ KNOWN_CHANNELS = {
     "crush_m": "m",
     "front_wheel_angle_rad": "rad",
     "rear_wheel_angle_rad": "rad",
+    "front_wheel_height_m": "m",  # the hubs' rise above the path they rolled along: evidence, not fitted
+    "rear_wheel_height_m": "m",
     "engine_x_m": "m",
     "engine_vx_mps": "m/s",
     "force_N": "N",

@@ -146,7 +146,8 @@ def test_a_candidate_with_a_lower_chi2_and_no_more_parameters_never_loses():
 def candidate_fit(values, std, crush_max=0.6, engine_force_max=0.0, priors=None, k_compression=1.0e6):
     m = measurement()
     traj = types.SimpleNamespace(t=np.linspace(0.0, 0.2, 50), crush=np.linspace(0.0, crush_max, 50),
-                                 engine_force=np.full(50, engine_force_max), front_blocked=np.zeros(50))
+                                 engine_force=np.full(50, engine_force_max), front_blocked=np.zeros(50),
+                                 rear_margin=np.ones(50))
     params = types.SimpleNamespace(k_compression=k_compression)
     return FakeFit(m, {}, tuple(values), dict(values), dict(std), dict(priors or {}), {}, traj, params)
 
@@ -255,6 +256,50 @@ def wheel_recording(angle_turn_rad, car_moves_m, with_angle=True, sigma=0.005, n
                                  engine_force=np.zeros(n))
     return FakeFit(m, {"x_m": ch["x_m"]}, ("front_wheel_block.depth",), {"front_wheel_block.depth": 0.45},
                    {"front_wheel_block.depth": 0.01}, {}, {}, traj, types.SimpleNamespace(k_compression=1e6))
+
+
+# ---------------------------------------------------------------- evidence: rear wheels lifted
+
+def lift_recording(measured_rise_m, model_lift_m=0.05, with_height=True, sigma=0.002, n=101):
+    """100 ms in which the fitted model lifts the rear wheels evenly by ``model_lift_m`` and
+    the tracked rear hub rises ``measured_rise_m``; contact 2 ms after the clock's zero."""
+    t = np.linspace(0.0, 0.1, n)
+    ch, sg = {"x_m": 2.0 * t}, {"x_m": np.full(n, 1e-3)}
+    if with_height:
+        ch["rear_wheel_height_m"], sg["rear_wheel_height_m"] = measured_rise_m * t / 0.1, np.full(n, sigma)
+    m = Measurement(t=t, channels=ch, sigma=sg)
+    traj = types.SimpleNamespace(t=t, rear_lift=model_lift_m * t / 0.1, rear_margin=-np.ones(n),
+                                 crush=np.linspace(0.0, 0.6, n), engine_force=np.zeros(n))
+    name = "rear_axle_lift.rear_axle_stiffness"
+    return FakeFit(m, {"x_m": ch["x_m"]}, (name,), {name: 400e3}, {name: 10e3}, {}, {}, traj,
+                   types.SimpleNamespace(k_compression=1e6), contact_time=0.002)
+
+
+def test_a_rear_hub_seen_rising_with_the_model_supports_rear_lift(a4):
+    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+
+    why, seen = rear_wheels_lifted(lift_recording(0.05), a4, (0.0, 100.0))
+    assert why == "" and seen.startswith("seen:")
+    assert _plausible("rear_axle_lift", lift_recording(0.05), a4) == ""
+
+
+def test_a_rear_hub_seen_on_the_ground_refutes_rear_lift(a4):
+    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+
+    why, _ = rear_wheels_lifted(lift_recording(0.0), a4, (0.0, 100.0))
+    assert "shows the rear hub on the ground" in why
+    assert "shows the rear hub on the ground" in _plausible("rear_axle_lift", lift_recording(0.0), a4)
+
+
+def test_a_rear_lift_no_hub_can_show_is_inferred_not_seen(a4):
+    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+
+    # no hub tracked
+    why, seen = rear_wheels_lifted(lift_recording(0.0, with_height=False), a4, (0.0, 100.0))
+    assert why == "" and seen.startswith("inferred, not seen")
+    # a 1 mm lift under 20 mm of hub noise: chi2 of telling it from the ground 0.2, below 9
+    why, seen = rear_wheels_lifted(lift_recording(0.0, model_lift_m=0.001, sigma=0.02), a4, (0.0, 100.0))
+    assert why == "" and seen.startswith("inferred, not seen") and "cannot tell" in seen
 
 
 def test_wheels_seen_standing_while_the_car_moves_support_blocking(a4):

@@ -2,16 +2,22 @@
 file's: this candidate changes the vehicle (its rear axle's stiffness, with the force
 plane dz' below the CG that lifts the rear) instead of adding a mechanism. It starts at,
 and is no finding within 3 standard deviations of, the vehicle file's stiffness; it acts
-where the rear axle's contact margin is negative."""
+where the rear axle's contact margin is negative.
+
+Evidence: where the film tracks the rear hub, its height above the path it rolled along
+(``rear_wheel_height_m``, the video stage's) must rise as the fitted model lifts the rear
+wheels; a hub seen staying on the ground refutes the lift.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import Candidate, parameter
+from identify.candidates.base import DECISIVE_CHI2, Candidate, parameter
 from identify.model import VEHICLE_OVERRIDES
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
+REAR_HEIGHT = "rear_wheel_height_m"
 
 
 def vehicle_file_stiffness(fr, vehicle, analysis=None) -> float:
@@ -26,6 +32,40 @@ def same_as_vehicle_file(fr, vehicle) -> str:
     return ""
 
 
+def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
+    """The measured rear hub height in the window set against the fitted model's rear-wheel
+    lift and against staying on the ground (each about its own constant, fitted): the lift is
+    refuted when the ground fits better by more than ``DECISIVE_CHI2``; where the two cannot
+    be told apart by that much, or no hub is tracked, the lift is inferred from the body's
+    motion, not seen."""
+    m = fr.measurement
+    t_ms = np.asarray(m.t) * 1e3
+    inside = (t_ms >= window_ms[0]) & (t_ms <= window_ms[1])
+    span = f"{window_ms[0]:.0f}-{window_ms[1]:.0f} ms"
+    ok = inside & m.valid(REAR_HEIGHT) if REAR_HEIGHT in m.channels else np.zeros_like(inside)
+    if ok.sum() < 3:
+        return "", f"inferred, not seen: the recording does not show the rear hub's height in {span}"
+    sigma = np.asarray(m.sigma[REAR_HEIGHT])[ok]
+    model_t = np.asarray(m.t)[ok] - fr.contact_time
+    lift = np.interp(model_t, np.asarray(fr.trajectory.t), np.asarray(fr.trajectory.rear_lift))  # m
+    height = np.asarray(m.channels[REAR_HEIGHT])[ok]
+
+    def chi2_about_a_constant(r):
+        w = 1.0 / sigma**2
+        return float(np.sum(w * (r - np.sum(w * r) / np.sum(w)) ** 2))
+
+    if chi2_about_a_constant(lift) < DECISIVE_CHI2:
+        return "", (f"inferred, not seen: the model lifts the rear wheels by {1e3 * np.ptp(lift):.0f} mm in {span},"
+                    f" which the hub height (sigma {1e3 * np.median(sigma):.0f} mm) cannot tell from the ground")
+    grounded, lifted = chi2_about_a_constant(height), chi2_about_a_constant(height - lift)
+    if lifted - grounded > DECISIVE_CHI2:
+        return (f"the recording shows the rear hub on the ground in {span} (it rose {1e3 * np.ptp(height):.0f} mm;"
+                f" the candidate lifts it {1e3 * np.ptp(lift):.0f} mm: chi2 {lifted:.0f} lifted against"
+                f" {grounded:.0f} on the ground)"), ""
+    return "", (f"seen: the rear hub rises with the model's lift in {span} (chi2 {lifted:.0f} lifted against"
+                f" {grounded:.0f} on the ground, over {int(ok.sum())} samples)")
+
+
 CANDIDATE = Candidate(
     "rear_axle_lift", None,
     (parameter("rear_axle_lift", "rear_axle_stiffness", "N/m", "log", scale=1e5),),
@@ -35,6 +75,7 @@ CANDIDATE = Candidate(
     "The force below the centre of gravity tips the car forward and the rear axle lifts off "
     "after a suspension travel the vehicle file does not give (its rear spring is stiffer or "
     "softer than assumed), so the rear rises, leaves the ground and lands at other times.",
+    evidence=rear_wheels_lifted,
     active=lambda fr: np.asarray(fr.trajectory.rear_margin) < 0.0,
     implausible=same_as_vehicle_file,
 )
