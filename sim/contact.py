@@ -22,13 +22,12 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 
-def contact_geometry(q, vehicle, dz_contact):
+def contact_geometry(q, dz_contact):
     """Crush depth and the contact point's horizontal Jacobian.
 
     Parameters
     ----------
     q : (3,) [x (m), z (m), pitch (rad, nose-down positive)], CG displacement from first contact.
-    vehicle : sim.Vehicle.
     dz_contact : m, contact-point height above the CG.
 
     Returns

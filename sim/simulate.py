@@ -139,7 +139,7 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     cabin_mass = vehicle.mass - sum(b.detached_mass() for b in bodies)
     inv_mass = jnp.stack([1.0 / cabin_mass, 1.0 / vehicle.mass, 1.0 / vehicle.pitch_inertia])
 
-    crush, jac = contact_geometry(q, vehicle, params.dz_contact)
+    crush, jac = contact_geometry(q, params.dz_contact)
     crush_rate = jac @ v
     blocked = _front_blocked(crush, params, vehicle)
     other, normal, margin, lift, axle_speed = ground_forces(q, v, vehicle, params, blocked, solver)
@@ -161,7 +161,7 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     v_new = v + dt * (accel_other + force * accel_per_newton)
     v_mid = 0.5 * (v + v_new)  # the velocity at the current time (leapfrog)
     q_new = q + dt * v_new
-    crush_new, jac_new = contact_geometry(q_new, vehicle, params.dz_contact)
+    crush_new, jac_new = contact_geometry(q_new, params.dz_contact)
     grows = loading & (crush_new > crush)
     f_load_new = loading_force(crush_new, jac_new @ v_new, params, vehicle)
     absorbed = jnp.where(grows, 0.5 * (f_load + f_load_new) * (crush_new - crush), 0.0)

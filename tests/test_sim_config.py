@@ -156,6 +156,13 @@ def test_n_samples_counts_both_ends_and_refuses_spans_outside_0_to_10_s():
             n_samples(bad)
 
 
+def test_the_solvers_output_interval_sets_the_runs_samples(a4):
+    run = simulate(load_params("paper_identified"), a4, 15.0, duration=0.01, solver=Solver(output_dt=2e-3))
+    assert np.asarray(run.t) == pytest.approx([0.0, 0.002, 0.004, 0.006, 0.008, 0.010])
+    # 2 ms at 15 m/s before the structure has slowed the car much
+    assert float(run.x[1]) == pytest.approx(0.030, rel=0.01)
+
+
 def test_batch_validation_names_the_bad_member():
     from sim import validate_params
 

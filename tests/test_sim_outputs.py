@@ -134,3 +134,28 @@ def test_names_and_units():
     assert time_label(0.05) == "x_at_50ms" and time_label(0.0125) == "x_at_12p5ms"
     units = output_units((0.05,))
     assert units["x_at_50ms"] == "m" and units["rebound_speed"] == "m/s" and units["rear_wheel_lift_time"] == "s"
+
+
+def test_the_reported_motion_axle_loads_and_lifts_agree_with_each_other(a4, blocked_run):
+    """The run's outputs against each other and the vehicle file: vz and pitch_rate are the
+    time derivatives of z and pitch (central differences, to 1 % of their range; measured
+    0.005 % and 0.34 %); at first contact the axles carry m g b / L and m g a / L (measured
+    0.03 % off: the ramp smoothing); where the contact margin exceeds the
+    20 N smoothing many times, the normal force is the margin; the front axle never lifts,
+    the rear does (paper parameters), and carries nothing while it is more than 1 mm up."""
+    run, dt = blocked_run, 1e-3
+    for pos, vel in (("z", "vz"), ("pitch", "pitch_rate")):
+        p, v = np.asarray(getattr(run, pos)), np.asarray(getattr(run, vel))
+        central = (p[2:] - p[:-2]) / (2 * dt)
+        assert np.abs(central - v[1:-1]).max() < 0.01 * np.ptp(v), vel
+    m, a, b = float(a4.mass), float(a4.cg_to_front_axle), float(a4.cg_to_rear_axle)
+    w = m * 9.80665
+    assert float(run.front_normal[0]) == pytest.approx(w * b / (a + b), rel=2e-3)
+    assert float(run.rear_normal[0]) == pytest.approx(w * a / (a + b), rel=2e-3)
+    for end in ("front", "rear"):
+        margin, normal = np.asarray(getattr(run, f"{end}_margin")), np.asarray(getattr(run, f"{end}_normal"))
+        big = margin > 500.0
+        assert big.any() and normal[big] == pytest.approx(margin[big], rel=1e-6, abs=1e-3)
+    front_lift, rear_lift = np.asarray(run.front_lift), np.asarray(run.rear_lift)
+    assert not np.any(front_lift) and rear_lift.max() > 0.005
+    assert np.all(np.asarray(run.rear_normal)[rear_lift > 0.001] < 0.01 * w * a / (a + b))

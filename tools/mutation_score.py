@@ -38,13 +38,17 @@ SURVIVED = {0}
 JIT_MODULES = ("sim.",)  # functions traced under jax.jit: mutmut's test map misses callers
 
 
-def widen_test_map(stats_file: Path, prefixes=JIT_MODULES) -> int:
+def widen_test_map(stats_file: Path, prefixes=JIT_MODULES, mutants: Path | None = None) -> int:
     """Map every test mutmut ran to every function of the modules starting with ``prefixes``
-    in mutmut's stats file; returns the number of functions widened."""
+    in mutmut's stats file (and to every such function with a mutant in ``mutants``' results,
+    mapped or not); returns the number of functions widened."""
     stats = json.loads(stats_file.read_text())
     every = sorted(stats["duration_by_test"])
     table = stats["tests_by_mangled_function_name"]
-    widened = [k for k in table if k.startswith(prefixes)]
+    names = set(table)
+    if mutants is not None:
+        names |= {k.rsplit("__mutmut_", 1)[0] for codes in read_results(mutants).values() for k in codes}
+    widened = sorted(k for k in names if k.startswith(prefixes))
     for k in widened:
         table[k] = every
     stats_file.write_text(json.dumps(stats))
@@ -99,7 +103,7 @@ def main(argv=None) -> int:
         again = [k for k in survivors_of(read_results(ROOT / "mutants"))
                  if not args.only or any(fnmatch.fnmatch(k, g) for g in args.only)]
         if again:
-            n = widen_test_map(ROOT / "mutants" / "mutmut-stats.json")
+            n = widen_test_map(ROOT / "mutants" / "mutmut-stats.json", mutants=ROOT / "mutants")
             print(f"second pass: {len(again)} survivors of the jit-compiled modules against every selected test"
                   f" ({n} functions re-mapped)")
             subprocess.run(run + again, cwd=ROOT, check=False)
