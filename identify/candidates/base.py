@@ -44,6 +44,13 @@ def loading_force_differs(fr, mechanism) -> np.ndarray:
     return extra > 0.02 * extra.max() if extra.max() > 0 else np.zeros_like(extra, bool)
 
 
+def chi2_about_a_constant(r: np.ndarray, sigma: np.ndarray) -> float:
+    """Chi-square of the series ``r`` about its own weighted mean (weights 1 / sigma^2): how
+    far it is from a constant, whatever the constant (an evidence check's unknown offset)."""
+    w = 1.0 / np.asarray(sigma) ** 2
+    return float(np.sum(w * (r - np.sum(w * r) / np.sum(w)) ** 2))
+
+
 def differs_from_zero(fr, name: str) -> str:
     """'' when parameter ``name``, whose value 0 switches its mechanism off, differs from 0 by
     2 standard deviations, else why not: a fit that cannot tell it from 0 has not found the
