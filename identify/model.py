@@ -19,6 +19,7 @@ import math
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from sim import Params
 
@@ -141,6 +142,12 @@ def assemble(template: Params, values: dict, default_speed):
 # Fitted quantities that change the vehicle rather than Params (a candidate of discovery):
 # name -> (Vehicle field, index in it).
 VEHICLE_OVERRIDES = {"rear_axle_lift.rear_axle_stiffness": ("axle_stiffness", 1)}
+
+
+def vehicle_value(vehicle, name: str) -> float:
+    """The vehicle file's own value of ``name``, one of ``VEHICLE_OVERRIDES``."""
+    field, index = VEHICLE_OVERRIDES[name]
+    return float(np.asarray(getattr(vehicle, field))[index])
 
 
 def vehicle_with(vehicle, values: dict):

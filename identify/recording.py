@@ -22,8 +22,6 @@ import numpy as np
 
 from identify.errors import UserError
 from identify.measurement import KNOWN_CHANNELS, Measurement, measurement_from_tracks_csv
-from video.io import VIDEO_SUFFIXES  # the one list of film formats the video stage opens
-
 
 
 @dataclasses.dataclass
@@ -104,8 +102,9 @@ def load_recording(
         derived = tuple(n for n in ("x_m", "engine_x_m") if n in measurement.channels)
         measurement = dataclasses.replace(measurement, derived=derived)
         return Recording(measurement, "sensors", path, sensor_test=test)
+    from video.io import VIDEO_SUFFIXES, open_film  # the one list of film formats the video stage opens
+
     if path.is_dir() or path.suffix.lower() in VIDEO_SUFFIXES:
-        from video.io import open_film
         from video.track import track_film
 
         film = open_film(path, fps=fps)

@@ -19,10 +19,9 @@ import importlib
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from identify.candidates.base import NEVER_REACHED, Candidate
-from identify.model import VEHICLE_OVERRIDES, base_parameters
+from identify.model import base_parameters, vehicle_value
 from sim import Params
 
 REGISTRY = (
@@ -84,10 +83,7 @@ def neutral_values(vehicle) -> dict[str, float]:
     for c in CANDIDATES:
         for name in c.names:
             v = c.neutral[name.split(".", 1)[1]]
-            if v == "vehicle":
-                field, index = VEHICLE_OVERRIDES[name]
-                v = np.asarray(getattr(vehicle, field))[index]
-            out[name] = float(v)
+            out[name] = vehicle_value(vehicle, name) if v == "vehicle" else float(v)
     return out
 
 

@@ -44,6 +44,17 @@ def loading_force_differs(fr, mechanism) -> np.ndarray:
     return extra > 0.02 * extra.max() if extra.max() > 0 else np.zeros_like(extra, bool)
 
 
+def samples_in_window(fr, channel: str, window_ms) -> tuple[np.ndarray, str]:
+    """The samples of ``channel`` an evidence check may use: a bool mask over the recording,
+    valid samples inside ``window_ms`` (ms, measurement clock; none when the recording lacks
+    the channel), and the window as text ("34-100 ms")."""
+    m = fr.measurement
+    t_ms = np.asarray(m.t) * 1e3
+    inside = (t_ms >= window_ms[0]) & (t_ms <= window_ms[1])
+    ok = inside & m.valid(channel) if channel in m.channels else np.zeros_like(inside)
+    return ok, f"{window_ms[0]:.0f}-{window_ms[1]:.0f} ms"
+
+
 def chi2_about_a_constant(r: np.ndarray, sigma: np.ndarray) -> float:
     """Chi-square of the series ``r`` about its own weighted mean (weights 1 / sigma^2): how
     far it is from a constant, whatever the constant (an evidence check's unknown offset)."""

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import DECISIVE_CHI2, NEVER_REACHED, Candidate, chi2_about_a_constant, parameter
+from identify.candidates.base import (DECISIVE_CHI2, NEVER_REACHED, Candidate, chi2_about_a_constant, parameter,
+                                      samples_in_window)
 from sim import FrontWheelBlock
 
 FRONT_ANGLE = "front_wheel_angle_rad"
@@ -39,16 +40,12 @@ def front_wheels_blocked(fr, vehicle, window_ms) -> tuple[str, str]:
     standing still does not fit worse than rolling by more than that.
     """
     m = fr.measurement
-    t_ms = np.asarray(m.t) * 1e3
-    inside = (t_ms >= window_ms[0]) & (t_ms <= window_ms[1])
-    span = f"{window_ms[0]:.0f}-{window_ms[1]:.0f} ms"
-    ok = inside & m.valid(FRONT_ANGLE) if FRONT_ANGLE in m.channels else np.zeros_like(inside)
+    ok, span = samples_in_window(fr, FRONT_ANGLE, window_ms)
     if ok.sum() < 3:
         return "", f"inferred, not seen: the recording does not show the front wheels in {span}"
     sigma = np.asarray(m.sigma[FRONT_ANGLE])[ok]
     rolling = np.asarray(fr.predictions["x_m"])[ok] / float(vehicle.wheel_radius)  # rad, up to a constant
     angle = np.asarray(m.channels[FRONT_ANGLE])[ok]
-
     separable = chi2_about_a_constant(rolling, sigma)  # what telling rolling from blocked is worth here
     if separable < DECISIVE_CHI2:
         return (f"the front wheels would be blocked only where the car barely moves ({span}): rolling would turn "

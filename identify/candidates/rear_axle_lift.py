@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import DECISIVE_CHI2, Candidate, chi2_about_a_constant, parameter
-from identify.model import VEHICLE_OVERRIDES
+from identify.candidates.base import DECISIVE_CHI2, Candidate, chi2_about_a_constant, parameter, samples_in_window
+from identify.model import vehicle_value
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
 REAR_HEIGHT = "rear_wheel_height_m"
@@ -22,8 +22,7 @@ REAR_HEIGHT = "rear_wheel_height_m"
 
 def vehicle_file_stiffness(fr, vehicle, analysis=None) -> float:
     """N/m: the vehicle file's rear axle stiffness."""
-    field, index = VEHICLE_OVERRIDES[NAME]
-    return float(np.asarray(getattr(vehicle, field))[index])
+    return vehicle_value(vehicle, NAME)
 
 
 def same_as_vehicle_file(fr, vehicle) -> str:
@@ -39,17 +38,13 @@ def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
     be told apart by that much, or no hub is tracked, the lift is inferred from the body's
     motion, not seen."""
     m = fr.measurement
-    t_ms = np.asarray(m.t) * 1e3
-    inside = (t_ms >= window_ms[0]) & (t_ms <= window_ms[1])
-    span = f"{window_ms[0]:.0f}-{window_ms[1]:.0f} ms"
-    ok = inside & m.valid(REAR_HEIGHT) if REAR_HEIGHT in m.channels else np.zeros_like(inside)
+    ok, span = samples_in_window(fr, REAR_HEIGHT, window_ms)
     if ok.sum() < 3:
         return "", f"inferred, not seen: the recording does not show the rear hub's height in {span}"
     sigma = np.asarray(m.sigma[REAR_HEIGHT])[ok]
     model_t = np.asarray(m.t)[ok] - fr.contact_time
     lift = np.interp(model_t, np.asarray(fr.trajectory.t), np.asarray(fr.trajectory.rear_lift))  # m
     height = np.asarray(m.channels[REAR_HEIGHT])[ok]
-
     if chi2_about_a_constant(lift, sigma) < DECISIVE_CHI2:
         return "", (f"inferred, not seen: the model lifts the rear wheels by {1e3 * np.ptp(lift):.0f} mm in {span},"
                     f" which the hub height (sigma {1e3 * np.median(sigma):.0f} mm) cannot tell from the ground")

@@ -38,7 +38,8 @@ NOISE_END_S = -0.005  # s, pre-impact samples used for offset and noise end here
 
 __all__ = [
     "G0", "Channel", "SensorTest", "MotionOptions", "common_time_base", "combine",
-    "find_onset", "onset_sigma", "contact_measurement", "contact_time", "filter_cfc", "integrate", "motion_sigma", "channel_motions",
+    "find_onset", "onset_sigma", "contact_measurement", "contact_time", "filter_cfc", "integrate",
+    "motion_sigma", "channel_motions",
     "usable_engine_channels", "measurement_from_test", "crash_facts",
 ]
 
