@@ -118,12 +118,14 @@ def x_sensitivities(fr, vehicle, rel_step: float = 1e-4) -> np.ndarray:
 
 
 def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, knot_ms: float = 10.0,
-                           max_terms: int = 8, min_rms_drop: float = 0.1) -> MissingForce | None:
+                           max_terms: int = 8, min_rms_drop: float = 0.1, tau: float | None = None) -> MissingForce | None:
     """Estimate the force missing from the fitted model ``fr`` (see module doc); None when
     there is no x channel or no force is justified: the BIC must fall by ``min_bic_gain``
     and, as a flexible fall-back needs more than a candidate does, the x residual's RMS by
     the fraction ``min_rms_drop`` (a misfit far below the noise, such as a tracking error
-    of a few frames, is not reported as physics)."""
+    of a few frames, is not reported as physics). ``tau`` (samples): the x channel's
+    autocorrelation time to count with (discovery's round, so that the estimate's BIC and a
+    candidate's compare); default: the noise's, from ``analysis``."""
     m = fr.measurement
     if "x_m" not in fr.predictions or "x_m" in m.derived:
         return None
@@ -133,8 +135,10 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
     s = np.asarray(m.sigma["x_m"])[ok]
     # the noise's effective autocorrelation time (``ChannelAnalysis.tau_noise``): the fit's
     # own tau would count the misfit being looked for as correlated noise
-    chan = analysis.channels.get("x_m") if analysis is not None else None
-    tau = max(1.0, float(chan.tau_noise)) if chan is not None else 1.0
+    if tau is None:
+        chan = analysis.channels.get("x_m") if analysis is not None else None
+        tau = float(chan.tau_noise) if chan is not None else 1.0
+    tau = max(1.0, float(tau))
     mass = float(vehicle.mass)
     h = knot_ms / 1e3
     centres = np.arange(0.0, t.max() - h / 2, h)

@@ -2,7 +2,7 @@
 mechanism (or a force no candidate has) go in, and the tool must name the mechanism, locate
 its window and recover its parameters, reading its output only. These show the loop can find
 what its own model can express; they are no measure of accuracy on real crashes (the
-"inverse crime"): that is measured on the reference world (``tests/test_discovery_reference.py``,
+"inverse crime"): that is measured on the reference world (``tests/test_reference_world_fit.py``,
 ``benchmarks/accuracy.py``) and on the NHTSA test (``tests/test_end_to_end.py``). The rules that
 decide are tested one by one in ``tests/test_discovery_rules.py``.
 
@@ -12,6 +12,7 @@ share it)."""
 
 import dataclasses
 import json
+import types
 
 import numpy as np
 import pytest
@@ -86,6 +87,30 @@ def test_front_wheel_block_named_located_and_recovered(a4, block_case):
     assert result.final.rms_m == pytest.approx(NOISE["x_m"], rel=0.15)  # the noise level
     assert result.final.model == "base+front_wheel_block"
     assert [mech.effect for mech in result.final.params.mechanisms] == ["front_wheel_block"]
+
+
+def test_a_candidate_a_generic_force_explains_far_better_is_not_named(a4, block_case, monkeypatch):
+    """The wiring of ``shape_check`` (its thresholds: tests/test_discovery_rules.py): on the
+    blocking recording, a generic missing force made to explain the misfit far better than
+    blocking does (10 times its BIC gain) turns the named finding into none, with the reason."""
+    import identify.discovery as discovery
+
+    _, m, found = block_case
+    gain = -next(t.delta_bic for t in found.rounds[0] if t.effect == "front_wheel_block")
+    taus = []
+
+    def generic(fr, analysis, vehicle, min_bic_gain, tau=None):
+        if tau is None:  # the final estimate of what is left: not this test's business
+            return None
+        taus.append(tau)
+        return types.SimpleNamespace(bic_before=20 * gain, bic_after=10 * gain)
+
+    monkeypatch.setattr(discovery, "estimate_missing_force", generic)
+    result = run_discovery(a4, m)
+    block = next(t for t in result.rounds[0] if t.effect == "front_wheel_block")
+    assert not block.accepted and "generic missing force" in block.reason, block
+    assert "front_wheel_block" not in result.effects
+    assert len(taus) == 1 and taus[0] >= 1.0  # once per round, counted with the round's tau
 
 
 def test_a_force_no_candidate_has_is_reported_unexplained(a4, unexplained_case):

@@ -77,6 +77,23 @@ def test_the_engine_takes_its_share_of_the_energy_and_the_barrier_peaks_earlier(
     assert float(run.mounts_broken[-1]) == pytest.approx(1.0)
 
 
+def test_an_engine_whose_mounts_let_go_is_carried_by_its_forward_stop(base, a4):
+    """Mounts letting go at once (at 1 N) and an engine out of the barrier's reach: the engine
+    runs ahead of the decelerating cabin only until its forward stop (0.05 m), where the
+    stop's spring holds it: beyond by at most its load over the stiffness (the engine's mass
+    times the cabin's peak deceleration, plus the damper's share, bounded here by a factor 2).
+    Without the stop it would run 0.5 a t^2, most of a metre, ahead."""
+    m_e = 200.0
+    run = simulate(with_engine(base, engine_mass=m_e, gap=2.0, mount_break_force=1.0), a4, PAPER_SPEED, DURATION)
+    ahead = np.asarray(run.engine_x) - np.asarray(run.x)
+    assert float(run.mounts_broken[-1]) == pytest.approx(1.0)
+    assert float(np.max(np.asarray(run.engine_force))) == 0.0  # never at the barrier
+    decel = float(np.max(-np.gradient(np.asarray(run.vx), np.asarray(run.t))))
+    stop = EngineImpact.defaults(engine_mass=m_e, gap=2.0).stop_forward
+    assert 0.05 < float(np.max(ahead)) < stop + 2.0 * m_e * decel / EngineImpact.STOP_STIFFNESS
+    assert float(np.max(ahead)) > stop + 0.2 * m_e * decel / EngineImpact.STOP_STIFFNESS  # it does lean on it
+
+
 def test_gradients_through_the_engine_match_finite_differences(base, a4):
     def peak_impulse(mass, gap):
         run = simulate(with_engine(base, engine_mass=mass, gap=gap), a4, PAPER_SPEED, 0.06)

@@ -218,6 +218,20 @@ def test_radius_range_is_respected():
     assert len(detect_targets(img, TargetConfig(max_radius_px=30.0))) == 1
 
 
+def test_to_gray_scales_each_integer_depth_to_one_and_averages_three_colours():
+    u8 = np.array([[0, 255], [51, 102]], np.uint8)
+    for frame in (u8, u8.astype(np.uint16) * 257, u8 / 255.0):
+        g = to_gray(frame)
+        assert g.dtype == np.float32
+        np.testing.assert_allclose(g, [[0.0, 1.0], [0.2, 0.4]], rtol=1e-6)
+    assert to_gray(np.array([[2.0]]))[0, 0] == 2.0  # a float frame is taken as it is
+    colour = np.array([[[255, 0, 0, 0], [0, 255, 255, 255]]], np.uint8)  # the fourth channel (alpha) ignored
+    for frame in (colour, colour.astype(np.uint16) * 257, colour / 255.0):
+        g = to_gray(frame)
+        assert g.dtype == np.float32 and g.shape == (1, 2)
+        np.testing.assert_allclose(g, [[1 / 3, 2 / 3]], rtol=1e-6)
+
+
 def test_bad_frame_shape_raises_video_error():
     with pytest.raises(VideoError):
         to_gray(np.zeros((2, 3, 4, 5)))

@@ -101,6 +101,9 @@ class Candidate:
         mechanism acts; None: where it changes the loading force (:func:`loading_force_differs`).
     implausible : callable(fit, vehicle) -> '' or why a fit of this candidate is not a
         finding, beyond the rules every candidate meets (``identify.discovery``).
+    unseen : callable(fit) -> {``effect.field``: reason}: its parameters the recorded crash
+        cannot show in this fit (an engine that never reaches the barrier shows nothing of its
+        gap but that it is larger), reported not identified with the reason; None: none.
     """
 
     effect: str
@@ -114,6 +117,7 @@ class Candidate:
     evidence: Callable | None = None
     active: Callable | None = None
     implausible: Callable = _no_rule
+    unseen: Callable | None = None
 
     @property
     def names(self) -> tuple[str, ...]:

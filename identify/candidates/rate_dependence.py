@@ -12,7 +12,8 @@ NAME = "rate_dependence.rate_coefficient"
 
 def not_physical_or_zero(fr, vehicle) -> str:
     if fr.values[NAME] <= 0:
-        return "a negative rate coefficient (the structure softer when crushed fast) is not physical"
+        return ("a rate coefficient of 0 or below is no finding: 0 changes nothing, and a negative one (the "
+                "structure softer when crushed fast) is not physical")
     return differs_from_zero(fr, NAME)
 
 
