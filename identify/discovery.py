@@ -162,7 +162,8 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     # the barrier's reach): a fit from one stays in its valley (on reference worlds whose
     # engine never hits, the fit from the typical gap made it hit: x RMS 13 mm against 4.7)
     guesses = [{k: v for g in combo for k, v in g.items()}
-               for combo in itertools.product(*(starting_guesses(BY_EFFECT[e], None, vehicle) for e in measured))]
+               for combo in itertools.product(*(starting_guesses(BY_EFFECT[e], None, vehicle, measured=True)
+                                                 for e in measured))]
     fr = multi = None
     for i, initial in enumerate(guesses):
         # the first guess with the multi-start search, the others once each
@@ -525,7 +526,7 @@ def _final(fr: FitResult, accepted) -> FitResult:
     params = dataclasses.replace(fr.params, mechanisms=accepted_mechanisms(fr.values, accepted))
     out = dataclasses.replace(fr, params=params, model="+".join(("base", *accepted)), identified=dict(fr.identified))
     for effect in accepted:
-        for name, why in (BY_EFFECT[effect].unseen(out) if BY_EFFECT[effect].unseen else {}).items():
+        for name, why in BY_EFFECT[effect].unseen(out).items():
             if name in out.names:
                 out.mark_not_identified(name, why)
     return out

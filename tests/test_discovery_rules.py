@@ -504,7 +504,7 @@ def test_every_candidate_module_is_registered_and_discovery_names_none_of_them()
     for name, c in zip(pkg.REGISTRY, pkg.CANDIDATES):
         assert c.effect == name
         assert c.mechanism is None or c.mechanism.effect == name
-        assert {n.split(".", 1)[1] for n in c.names} <= set(c.neutral) and all(set(s) == {n.split(".", 1)[1] for n in c.names} for s in c.starts)
+        assert {n.split(".", 1)[1] for n in c.names} <= set(c.neutral) and all(set(s) == {n.split(".", 1)[1] for n in c.names} for s in (*c.starts, *c.measured_starts))
         assert set(c.report) == {n.split(".", 1)[1] for n in c.names}
     source = open(identify.discovery.__file__).read()
     named = [e for e in pkg.REGISTRY if re.search(rf"[\"']{e}[\"']", source)]
@@ -528,7 +528,7 @@ def test_each_candidates_parameters_are_its_mechanisms_fields_in_its_units_and_r
             assert p.transform in ("log", "logit", "tanh", "linear"), p
             fit = types.SimpleNamespace(trajectory=types.SimpleNamespace(crush=np.array([0.0, 0.6])),
                                         params=types.SimpleNamespace(k_compression=1e6), values={})
-            for start in c.starts:
+            for start in (*c.starts, *c.measured_starts):
                 v = start[field](fit, a4, None) if callable(start[field]) else start[field]
                 if p.transform == "logit":
                     assert p.lower < v < p.upper, (p, v)

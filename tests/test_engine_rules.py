@@ -194,3 +194,18 @@ def test_what_the_crash_cannot_show_is_marked_on_the_final_fit_whatever_it_was_b
     assert "never reached the barrier" in out.identified["engine_impact.k_engine"][1]
     assert "engine_impact.gap" not in fr.identified  # the fit it was given is left as it was
     assert out.model == "base+engine_impact" and [m.effect for m in out.params.mechanisms] == ["engine_impact"]
+
+
+def test_only_a_measured_engine_is_also_started_out_of_the_barriers_reach(a4):
+    """The far start finds a measured engine that never hits (reference world 910000: x RMS
+    4.7 mm against 13 mm from the typical gap); a discovery candidate that never hits is no
+    finding, so discovery does not spend a fit on it."""
+    from identify.candidates import BY_EFFECT, starting_guesses
+    from identify.candidates.engine_impact import GAP_OUT_OF_REACH_M
+
+    engine = BY_EFFECT["engine_impact"]
+    assert [g["engine_impact.gap"] for g in starting_guesses(engine, None, a4)] == [0.35]  # audi_a4.toml
+    both = starting_guesses(engine, None, a4, measured=True)
+    assert [g["engine_impact.gap"] for g in both] == [0.35, GAP_OUT_OF_REACH_M]
+    assert {k: v for k, v in both[1].items() if k != "engine_impact.gap"} == {
+        k: v for k, v in both[0].items() if k != "engine_impact.gap"}

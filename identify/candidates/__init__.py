@@ -93,12 +93,14 @@ def held_for(active, vehicle) -> dict[str, float]:
     return {k: v for k, v in neutral_values(vehicle).items() if k.split(".", 1)[0] not in active}
 
 
-def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None) -> list[dict[str, float]]:
+def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None, measured=False) -> list[dict[str, float]]:
     """The candidate's starting guesses in physical units (``effect.field`` -> value): its
-    ``starts``, each rule evaluated on the current fit ``fr`` (None before any fit), the
+    ``starts`` (and its ``measured_starts`` when ``measured``: the recording measures the
+    body itself), each rule evaluated on the current fit ``fr`` (None before any fit), the
     vehicle and the current residual analysis."""
+    starts = (*candidate.starts, *candidate.measured_starts) if measured else candidate.starts
     return [{f"{candidate.effect}.{field}": float(value(fr, vehicle, analysis) if callable(value) else value)
-             for field, value in start.items()} for start in candidate.starts]
+             for field, value in start.items()} for start in starts]
 
 
 def accepted_mechanisms(values: dict[str, float], effects) -> tuple:

@@ -62,6 +62,15 @@ def chi2_about_a_constant(r: np.ndarray, sigma: np.ndarray) -> float:
     return float(np.sum(w * (r - np.sum(w * r) / np.sum(w)) ** 2))
 
 
+def signal_chi2s(measured: np.ndarray, signal: np.ndarray, sigma: np.ndarray) -> tuple[float, float, float]:
+    """An evidence check's three chi-squares, each about its own constant
+    (:func:`chi2_about_a_constant`): of the ``signal`` a mechanism implies for a measured
+    channel (what telling its presence from its absence is worth), of the ``measured``
+    channel as it is (the signal absent) and of ``measured - signal`` (the signal present)."""
+    return (chi2_about_a_constant(signal, sigma), chi2_about_a_constant(measured, sigma),
+            chi2_about_a_constant(measured - signal, sigma))
+
+
 def differs_from_zero(fr, name: str) -> str:
     """'' when parameter ``name``, whose value 0 switches its mechanism off, differs from 0 by
     2 standard deviations, else why not: a fit that cannot tell it from 0 has not found the
@@ -74,6 +83,10 @@ def differs_from_zero(fr, name: str) -> str:
 
 def _no_rule(fr, vehicle) -> str:
     return ""
+
+
+def _nothing_unseen(fr) -> dict[str, str]:
+    return {}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,7 +116,9 @@ class Candidate:
         finding, beyond the rules every candidate meets (``identify.discovery``).
     unseen : callable(fit) -> {``effect.field``: reason}: its parameters the recorded crash
         cannot show in this fit (an engine that never reaches the barrier shows nothing of its
-        gap but that it is larger), reported not identified with the reason; None: none.
+        gap but that it is larger), reported not identified with the reason.
+    measured_starts : further starting guesses (as ``starts``) when the recording measures
+        this body itself and it is fitted as part of the base model.
     """
 
     effect: str
@@ -117,7 +132,8 @@ class Candidate:
     evidence: Callable | None = None
     active: Callable | None = None
     implausible: Callable = _no_rule
-    unseen: Callable | None = None
+    unseen: Callable = _nothing_unseen
+    measured_starts: tuple[dict[str, float | Callable], ...] = ()
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -3,7 +3,8 @@ shared with the two-body base model when a recording measures the engine's own m
 What is known of it before a fit (its mass; its gap when the vehicle file gives one) enters
 as priors; it is no finding when the engine never reaches the barrier in the recorded crash,
 and a measured engine that never reaches it leaves its gap and block stiffness not identified.
-Its fits start twice: at the typical gap, and out of the barrier's reach.
+A fit starts at the typical gap; a measured engine's also out of the barrier's reach (a
+candidate that never reaches it is no finding, so discovery does not try that start).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ ENGINE_MASS_FRACTION = 0.13  # of the test mass, when the vehicle file gives no 
 ENGINE_GAP_M = 0.35  # m, when the vehicle file gives no engine_gap
 ENGINE_MASS_REL_SIGMA = 0.3
 ENGINE_GAP_SIGMA_M = 0.1
-GAP_OUT_OF_REACH_M = 1.15  # m, the second start: beyond the crush of any crash test (near the range's top)
+GAP_OUT_OF_REACH_M = 1.15  # m, a measured engine's second start: beyond any crash test's crush (near the range's top)
 
 
 def engine_typical(vehicle) -> dict[str, float]:
@@ -41,11 +42,16 @@ def engine_priors(vehicle) -> dict[str, tuple[float, float]]:
     return out
 
 
+def reaches_the_barrier(fr) -> bool:
+    """Whether the fitted engine carries any barrier force in the recorded crash."""
+    return float(np.max(np.asarray(fr.trajectory.engine_force))) > 0.0
+
+
 def unseen_without_a_hit(fr) -> dict[str, str]:
     """The engine's barrier parameters when it never touched the barrier in the fitted crash:
     the gap is then only known to exceed how far the engine came (its largest travel, m),
     and the block's stiffness is not seen at all."""
-    if float(np.max(np.asarray(fr.trajectory.engine_force))) > 0.0:
+    if reaches_the_barrier(fr):
         return {}
     reached = float(np.max(np.asarray(fr.trajectory.engine_x)))
     why = "not identified: the engine never reached the barrier in the recorded crash"
@@ -53,8 +59,13 @@ def unseen_without_a_hit(fr) -> dict[str, str]:
             "engine_impact.k_engine": why}
 
 
+TYPICAL_START = {"engine_mass": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.engine_mass"],
+                 "gap": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.gap"],
+                 "k_engine": 3e6, "k_rear": 1e6, "stop_forward": 0.05}
+
+
 def never_reaches_the_barrier(fr, vehicle) -> str:
-    if float(np.max(np.asarray(fr.trajectory.engine_force))) <= 0.0:
+    if not reaches_the_barrier(fr):
         return "the engine never reaches the barrier in the recorded crash"
     return ""
 
@@ -68,14 +79,11 @@ CANDIDATE = Candidate(
      parameter("engine_impact", "stop_forward", "m", "logit", lower=0.01, upper=0.6)),
     {"engine_mass": 0.0, "gap": NEVER_REACHED, "k_engine": 3e6, "k_rear": 1e6, "restitution_engine": 0.1,
      "mount_stiffness": 8e5, "mount_break_force": 5e4, "stop_forward": 0.05},
-    ({"engine_mass": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.engine_mass"],
-      "gap": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.gap"],
-      "k_engine": 3e6, "k_rear": 1e6, "stop_forward": 0.05},
-     {"engine_mass": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.engine_mass"],
-      "gap": GAP_OUT_OF_REACH_M, "k_engine": 3e6, "k_rear": 1e6, "stop_forward": 0.05}),
+    (TYPICAL_START,),
     {"engine_mass": "engine_mass_kg", "gap": "gap_m", "k_engine": "k_engine_N_per_m",
      "k_rear": "k_rear_N_per_m", "stop_forward": "stop_forward_m"},
     priors=engine_priors,
     implausible=never_reaches_the_barrier,
     unseen=unseen_without_a_hit,
+    measured_starts=({**TYPICAL_START, "gap": GAP_OUT_OF_REACH_M},),
 )

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import (DECISIVE_CHI2, NEVER_REACHED, Candidate, chi2_about_a_constant, parameter,
-                                      samples_in_window)
+from identify.candidates.base import (DECISIVE_CHI2, NEVER_REACHED, Candidate, parameter, samples_in_window,
+                                      signal_chi2s)
 from sim import FrontWheelBlock
 
 FRONT_ANGLE = "front_wheel_angle_rad"
@@ -46,12 +46,11 @@ def front_wheels_blocked(fr, vehicle, window_ms) -> tuple[str, str]:
     sigma = np.asarray(m.sigma[FRONT_ANGLE])[ok]
     rolling = np.asarray(fr.predictions["x_m"])[ok] / float(vehicle.wheel_radius)  # rad, up to a constant
     angle = np.asarray(m.channels[FRONT_ANGLE])[ok]
-    separable = chi2_about_a_constant(rolling, sigma)  # what telling rolling from blocked is worth here
+    separable, blocked, turning = signal_chi2s(angle, rolling, sigma)  # standing still, or rolling
     if separable < DECISIVE_CHI2:
         return (f"the front wheels would be blocked only where the car barely moves ({span}): rolling would turn "
                 f"them by {np.ptp(rolling):.3f} rad, which the hub angle (sigma {np.median(sigma):.3f} rad) cannot "
                 "tell from standing still, so no channel can check it"), ""
-    blocked, turning = chi2_about_a_constant(angle, sigma), chi2_about_a_constant(angle - rolling, sigma)
     if blocked - turning > DECISIVE_CHI2:
         return (f"the recording shows the front wheels turning in {span} (turned {np.ptp(angle):.2f} rad; rolling "
                 f"{np.ptp(rolling):.2f} rad), where the candidate has them blocked (chi2 {blocked:.0f} standing "

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import DECISIVE_CHI2, Candidate, chi2_about_a_constant, parameter, samples_in_window
+from identify.candidates.base import DECISIVE_CHI2, Candidate, parameter, samples_in_window, signal_chi2s
 from identify.model import vehicle_value
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
@@ -45,10 +45,10 @@ def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
     model_t = np.asarray(m.t)[ok] - fr.contact_time
     lift = np.interp(model_t, np.asarray(fr.trajectory.t), np.asarray(fr.trajectory.rear_lift))  # m
     height = np.asarray(m.channels[REAR_HEIGHT])[ok]
-    if chi2_about_a_constant(lift, sigma) < DECISIVE_CHI2:
+    separable, grounded, lifted = signal_chi2s(height, lift, sigma)
+    if separable < DECISIVE_CHI2:
         return "", (f"inferred, not seen: the model lifts the rear wheels by {1e3 * np.ptp(lift):.0f} mm in {span},"
                     f" which the hub height (sigma {1e3 * np.median(sigma):.0f} mm) cannot tell from the ground")
-    grounded, lifted = chi2_about_a_constant(height, sigma), chi2_about_a_constant(height - lift, sigma)
     if lifted - grounded > DECISIVE_CHI2:
         return (f"the recording shows the rear hub on the ground in {span} (it rose {1e3 * np.ptp(height):.0f} mm;"
                 f" the candidate lifts it {1e3 * np.ptp(lift):.0f} mm: chi2 {lifted:.0f} lifted against"
