@@ -24,6 +24,8 @@ import optimistix as optx
 
 from identify.errors import UserError
 from identify.measurement import Measurement
+from identify.model_error import ModelError
+from identify.model_error import table as model_error_table
 from identify.least_squares import channel_residuals, parameter_covariance, prior_residuals, weighted_offset
 from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
 from sim import Params, Solver, Vehicle, make_params
@@ -73,8 +75,10 @@ class FitOptions:
 class FitResult:
     """The outcome of a fit (physical units; see ``names`` and ``units``).
 
-    values, std : name -> value, one-sigma uncertainty.
-    covariance, correlation : (p, p) in the order of ``names``.
+    values, std : name -> value, one-sigma uncertainty: the data's and the model's own error
+        in quadrature (``identify.model_error``); std_data, std_model : the two parts.
+    covariance : (p, p) in the order of ``names``, the model's error added to its diagonal;
+    correlation : the data's (what the recording ties together), same order.
     identified : name -> (bool, reason) for the collision parameters, for other log-scale
         parameters known no better than ``LOG_SCALE_NOT_IDENTIFIED``, and for any fitted
         quantity that ended at a bound of its transform (:meth:`mark_not_identified`).
@@ -114,6 +118,8 @@ class FitResult:
     correlation_time: dict[str, float] = dataclasses.field(default_factory=dict)
     priors: dict[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
     at_bound: dict[str, str] = dataclasses.field(default_factory=dict)
+    std_data: dict[str, float] = dataclasses.field(default_factory=dict)
+    std_model: dict[str, float] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -274,6 +280,7 @@ def fit(
     held: dict | None = None,
     require_convergence: bool = True,
     priors: dict | None = None,
+    model_error: ModelError | None = None,
 ) -> FitResult:
     """Fit ``free`` parameters of the model to ``measurement``.
 
@@ -295,6 +302,8 @@ def fit(
         False returns it (a caller that continues the fit from it decides).
     priors : name -> (value, sigma) in physical units: what is known of a fitted quantity
         before the fit (a vehicle file's estimate), a residual (fitted - value) / sigma.
+    model_error : the model's own error added to the standard deviations (default the
+        calibrated ``identify.model_error.table()``; ``model_error.NONE``: the data's alone).
 
     Returns
     -------
@@ -400,12 +409,16 @@ def fit(
             rms[name] = float(np.sqrt(np.mean((pred - measurement.channels[name])[valid] ** 2)))
 
     names = tuple(p.name for p in free)
+    std_data = dict(zip(names, map(float, unc.std)))
+    std, std_model = (model_error or model_error_table()).covering(values, std_data)
     result = FitResult(
         names=names,
         units={p.name: p.unit for p in free},
         values=values,
-        std=dict(zip(names, map(float, unc.std))),
-        covariance=unc.cov,
+        std=std,
+        std_data=std_data,
+        std_model=std_model,
+        covariance=unc.cov + np.diag([std_model[n] ** 2 for n in names]),
         correlation=unc.corr,
         identified={},
         rms=rms,
@@ -426,7 +439,7 @@ def fit(
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
     )
     result.identified = {**assess_identifiability(result, channels),
-                         **log_scale_identifiability(free, result.values, result.std)}
+                         **log_scale_identifiability(free, result.values, result.std, result.std_model)}
     # no silent bounds: a value the bound stopped is not a value the data gave
     result.at_bound = {p.name: where for p in free if (where := p.at_bound(result.values[p.name]))}
     for name, why in result.at_bound.items():
@@ -439,18 +452,38 @@ def fit(
     return result
 
 
-def log_scale_identifiability(free, values: dict, std: dict) -> dict[str, tuple[bool, str]]:
+def log_scale_identifiability(free, values: dict, std: dict, std_model: dict | None = None) -> dict[str, tuple[bool, str]]:
     """name -> (False, reason) for each log-scale parameter other than the collision
-    parameters (a mechanism's stiffness, an engine's stiffnesses) whose standard deviation
-    exceeds ``LOG_SCALE_NOT_IDENTIFIED`` of its value: held to the standard of k_compression."""
+    parameters (a mechanism's stiffness, an engine's stiffnesses and mass) whose standard
+    deviation exceeds ``LOG_SCALE_NOT_IDENTIFIED`` of its value: held to the standard of
+    k_compression. ``std_model``: the model's own part of ``std``, named in the reason when
+    it is the larger part."""
     out = {}
     for p in free:
         if p.transform == "log" and p.name not in NOT_IDENTIFIED and values[p.name] > 0:
             rel = std[p.name] / values[p.name]
             if not rel <= LOG_SCALE_NOT_IDENTIFIED:  # NaN too
-                out[p.name] = (False, f"not identified (std {100 * rel:.0f} %): the recorded motion barely changes"
-                                      " when it changes")
+                why = (model_error_reason(values[p.name], std[p.name], (std_model or {}).get(p.name, 0.0), "relative")
+                       or "the recorded motion barely changes when it changes")
+                out[p.name] = (False, f"not identified (std {100 * rel:.0f} %): {why}")
     return out
+
+
+def model_error_reason(value: float, std: float, std_model: float, kind: str) -> str:
+    """Why a parameter is not identified when the model's own error is the larger part of its
+    ``std`` (``identify.model_error``), else ''."""
+    std_data = math.sqrt(max(std * std - std_model * std_model, 0.0))
+    if not std_model > std_data:
+        return ""
+
+    def size(sd):
+        if kind != "relative" or not value:
+            return f"{sd:.2g}"
+        pct = 100 * sd / abs(value)
+        return f"{pct:.0f} %" if pct >= 10 else f"{pct:.2g} %"
+
+    return (f"the model's own error ({size(std_model)}) outweighs the data's ({size(std_data)}): on recordings the"
+            " model did not make, its simplifications moved this parameter that far")
 
 
 def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool, str]]:
@@ -476,8 +509,8 @@ def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool,
         if spread <= limit:
             out[name] = (True, "")
             continue
-        reason = ""
-        if name in ("k_restitution", "restitution"):
+        reason = model_error_reason(value, sd, result.std_model.get(name, 0.0), kind)
+        if not reason and name in ("k_restitution", "restitution"):
             tr = result.trajectory
             stopped = np.flatnonzero(np.asarray(tr.vx) <= 0.0)
             comp = float(np.asarray(tr.t)[stopped[0]] * 1e3) if len(stopped) else None

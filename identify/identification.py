@@ -109,21 +109,21 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
                             "identified": False, "reason": (held or {}).get(name, "held fixed, not fitted")}  # fmt: skip
             continue
         ok, reason = fr.identified.get(name, (True, ""))
-        entry = {"value": fr.values[name], "unit": fr.units[name], "std": fr.std[name], "identified": ok}
+        entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name), "identified": ok}
         if not ok:
             entry["reason"] = reason
         params[name] = entry
     for key in fr.names:  # a discovered mechanism's parameters: "stiffness_zone.depth"
         if "." in key:
-            params[key] = {"value": fr.values[key], "unit": fr.units[key], "std": fr.std[key], "identified": True}
+            params[key] = {"value": fr.values[key], "unit": fr.units[key], **_std_entry(fr, key), "identified": True}
             ok, reason = fr.identified.get(key, (True, ""))
             if not ok:
                 params[key].update(identified=False, reason=reason)
             elif key in fr.priors and fr.std[key] > PRIOR_NARROWING * fr.priors[key][1]:
                 mu, sigma = fr.priors[key]
                 params[key].update(identified=False, reason=(
-                    f"not identified: the recording barely narrows what was known before the fit ({mu:.4g} +-"
-                    f" {sigma:.2g} {fr.units[key]}; fitted +- {fr.std[key]:.2g})"))
+                    f"not identified: the fit barely narrows what was known before it ({mu:.4g} +-"
+                    f" {sigma:.2g} {fr.units[key]}; fitted +- {fr.std[key]:.2g} with the model's own error)"))
     model_events = {k: (v + fr.contact_time * 1e3 if v is not None else None) for k, v in events_ms(fr.trajectory).items()}
     tracks = recording.tracks
     doc = {
@@ -178,11 +178,17 @@ PRIOR_NARROWING = 0.5
 def _nuisance_entry(fr: FitResult, name: str) -> dict:
     """result.json's entry of a nuisance parameter; marked not identified with the reason
     when the fit says so (a contact time stopped by its bound)."""
-    entry = {"value": fr.values[name], "unit": fr.units[name], "std": fr.std[name]}
+    entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name)}
     ok, reason = fr.identified.get(name, (True, ""))
     if not ok:
         entry.update(identified=False, reason=reason)
     return entry
+
+
+def _std_entry(fr: FitResult, name: str) -> dict:
+    """A fitted quantity's standard deviations: ``std`` (what to quote), and its two parts,
+    the data's ``std_data`` and the model's own error ``std_model`` (``identify.model_error``)."""
+    return {"std": fr.std[name], "std_data": fr.std_data.get(name, fr.std[name]), "std_model": fr.std_model.get(name, 0.0)}
 
 
 def _unit(name):

@@ -65,8 +65,8 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         "",
         "## Parameters (the paper's Table 1, side by side)",
         "",
-        "| parameter | V-SIM default | identified | std | |",
-        "| --- | --- | --- | --- | --- |",
+        "| parameter | V-SIM default | identified | std | std of the data alone | |",
+        "| --- | --- | --- | --- | --- | --- |",
     ]
     for name, label, scale, unit in PARAMETER_ROWS:
         p = doc["parameters"].get(name)
@@ -76,8 +76,10 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         status = "" if p.get("identified", True) else f"**{p['reason']}**"
         lines.append(
             f"| {label} | {_fmt(defaults.get(name), scale)}{u} | {_fmt(p['value'], scale, 4)}{u} |"
-            f" {_fmt(p.get('std'), scale, 2)}{u} | {status} |"
+            f" {_fmt(p.get('std'), scale, 2)}{u} | {_fmt(p.get('std_data'), scale, 2)}{u} | {status} |"
         )
+    lines += ["", "The std adds to the data's the model's own error (`identify/model_error.py`):"
+              " how far the model's simplifications moved each parameter on recordings it did not make."]
     known = prior_lines(doc.get("priors") or {})
     if known:
         lines += ["", "## What was known before the fit", ""] + [f"- {k}" for k in known]

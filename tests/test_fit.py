@@ -2,7 +2,9 @@
 and the fit must give back the parameters they were made with, with honest uncertainty, and
 say what it cannot see. Round trips show the least squares, the covariance and the
 identifiability rules work; accuracy on crashes the model did not make is measured on the
-reference world (``benchmarks/accuracy.py``) and the NHTSA test (``tests/test_end_to_end.py``)."""
+reference world (``benchmarks/accuracy.py``) and the NHTSA test (``tests/test_end_to_end.py``).
+On its own recordings the model's own error is zero by construction, so these fits add none
+(``model_error=NONE``); the last test checks the calibrated one is added."""
 
 import dataclasses
 
@@ -11,6 +13,7 @@ import pytest
 
 from helpers import synthetic_measurement
 from identify.fitting import fit, log_scale_identifiability
+from identify.model_error import NONE, table
 from sim import named_params
 
 TRUTH = {"k_compression": 970e3, "k_restitution": 600e3, "restitution": 0.17, "dz_contact": -0.21}
@@ -23,7 +26,7 @@ def paper_measurement(a4):
 
 @pytest.fixture(scope="module")
 def paper_fit(a4, paper_measurement):
-    return fit(paper_measurement, a4)
+    return fit(paper_measurement, a4, model_error=NONE)
 
 
 def test_recovers_the_papers_parameters_within_two_sigma(paper_fit):
@@ -44,7 +47,7 @@ def test_contact_time_is_resolved_to_a_tenth_of_a_millisecond_at_film_noise(a4):
     a fit that returned 0 for a contact 0.4 ms after the clock's zero would be 9 sigma off."""
     noise = {"x_m": 0.0003, "z_m": 0.0003, "pitch_rad": 0.0004, "front_wheel_angle_rad": 0.002,
              "rear_wheel_angle_rad": 0.002}
-    r = fit(synthetic_measurement(a4, named_params("paper_identified"), noise=noise, contact_time=0.0004), a4)
+    r = fit(synthetic_measurement(a4, named_params("paper_identified"), noise=noise, contact_time=0.0004), a4, model_error=NONE)
     assert r.std["contact_time"] < 0.0001
     assert abs(r.values["contact_time"] - 0.0004) < 3 * r.std["contact_time"]
 
@@ -65,7 +68,7 @@ def test_restitution_not_identified_when_film_ends_in_compression(a4, paper_meas
     m = paper_measurement
     late = m.t > 0.055
     short = dataclasses.replace(m, sigma={k: np.where(late, np.nan, v) for k, v in m.sigma.items()})
-    r = fit(short, a4)
+    r = fit(short, a4, model_error=NONE)
     assert r.identified["k_compression"][0]
     for name in ("k_restitution", "restitution"):
         ok, reason = r.identified[name]
@@ -79,7 +82,7 @@ def test_force_height_not_identified_from_compression_alone_without_pitch(a4, pa
     # it does not.
     m = paper_measurement.window(-0.02, 0.060)
     flat = dataclasses.replace(m, channels={"x_m": m.channels["x_m"]}, sigma={"x_m": m.sigma["x_m"]})
-    r = fit(flat, a4)
+    r = fit(flat, a4, model_error=NONE)
     assert r.identified["k_compression"][0]
     ok, reason = r.identified["dz_contact"]
     assert not ok and "no pitch or height channel" in reason, reason
@@ -106,9 +109,9 @@ def test_correlated_tracking_errors_widen_the_intervals(a4, paper_measurement, p
     for i in range(1, len(e)):
         e[i] = 0.9 * e[i - 1] + rng.normal(0.0, 0.002 * np.sqrt(1 - 0.81))
     wandering = dataclasses.replace(m, channels={**m.channels, "x_m": m.channels["x_m"] - _white_part(m) + e})
-    r = fit(wandering, a4)
+    r = fit(wandering, a4, model_error=NONE)
     assert r.correlation_time["x_m"] > 5 and paper_fit.correlation_time["x_m"] < 1.5
-    assert r.std["k_compression"] > 1.5 * paper_fit.std["k_compression"]
+    assert r.std_data["k_compression"] > 1.5 * paper_fit.std_data["k_compression"]
 
 
 def _white_part(m):
@@ -185,7 +188,7 @@ def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_m
     from identify.fitting import FitOptions
 
     late = dataclasses.replace(paper_measurement, t=paper_measurement.t - 0.025)
-    r = fit(late, a4, options=dataclasses.replace(FitOptions(), starts=1))  # the same compile as the others
+    r = fit(late, a4, model_error=NONE, options=dataclasses.replace(FitOptions(), starts=1))  # the same compile as the others
     assert "contact_time" in r.at_bound and "bound" in r.at_bound["contact_time"]
     ok, reason = r.identified["contact_time"]
     assert not ok and "where the fit stopped it" in reason
@@ -208,7 +211,7 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
     # said to put contact at t = 0 +- 1 ms
     off = dataclasses.replace(synthetic_measurement(a4, named_params("paper_identified"), contact_time=0.005),
                               contact_time_sigma=0.001)
-    r = fit(off, a4)
+    r = fit(off, a4, model_error=NONE)
     pull = r.pulls()["contact_time"]
     assert pull["prior"] == 0.0 and pull["prior_std"] == 0.001
     assert pull["conflict"] and pull["pull"] == pytest.approx(r.values["contact_time"] / 0.001)
@@ -225,3 +228,22 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
     warned = fit_warnings(r)
     assert len(warned) == 1 and warned[0].startswith("contact_time fitted at 0.004") and "disagree there" in warned[0]
     assert fit_warnings(paper_fit) == []
+
+
+def test_the_calibrated_model_error_is_added_in_quadrature_and_can_decide_identifiability(a4, paper_measurement,
+                                                                                         paper_fit):
+    """By default the fit adds the calibrated model error (``identify/model_error.json``) to the
+    data's std and to the covariance's diagonal, and a parameter whose model error exceeds its
+    limit is not identified, saying so, however well the data fix it."""
+    r = fit(paper_measurement, a4)
+    me = table()
+    assert r.std_data == pytest.approx(paper_fit.std_data, rel=1e-6)
+    for name in r.names:
+        model = me.std(name, r.values[name])
+        assert r.std_model[name] == pytest.approx(model)
+        assert r.std[name] == pytest.approx(np.hypot(r.std_data[name], model), rel=1e-9)
+        assert r.covariance[r.names.index(name), r.names.index(name)] == pytest.approx(r.std[name] ** 2, rel=1e-9)
+    assert r.std_model["k_compression"] > 3 * r.std_data["k_compression"]  # the data alone would claim ~0.1 %
+    assert r.std_model["contact_time"] == 0.0  # not in the table: the data's std alone
+    ok, reason = r.identified["k_restitution"]
+    assert me.relative["k_restitution"] > 0.2 and not ok and "model's own error" in reason, reason

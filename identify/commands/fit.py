@@ -85,6 +85,8 @@ def _run(args: argparse.Namespace, folder) -> int:
     print(f"{doc['vehicle_name']}, {doc['impact_speed_kmh']:.2f} km/h, fit RMS {1e3 * doc['fit']['rms_m']:.2f} mm")
     for name, p in doc["parameters"].items():
         std = f" +- {p['std']:.3g}" if p.get("std") is not None else ""
+        if p.get("std_model"):
+            std += f" (data alone +- {p['std_data']:.3g})"
         flag = "" if p.get("identified", True) else f"   ({p['reason']})"
         print(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
     for line in prior_lines(doc.get("priors") or {}):

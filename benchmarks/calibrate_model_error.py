@@ -1,0 +1,123 @@
+"""Measure the collision model's own error on calibration worlds and write
+``identify/model_error.json`` (run by hand):
+
+    python benchmarks/accuracy.py --calibration --effect clean --n 16 --format isomme --json cal.json
+    python benchmarks/calibrate_model_error.py cal.json [more.json ...] [--dry-run]
+
+For each parameter of ``KINDS``, the fits' errors against the world's truth and the fits'
+own standard deviations (the data's alone, ``std_data``) give the model-form standard
+deviation that makes the errors' mean square one combined standard deviation
+(``identify.model_error.calibrate``): relative for a stiffness, a mass and the speed,
+absolute for the restitution and the engine's gap. Only values the fit reported identified
+count (the term is to make what the tool claims cover the truth), only clean worlds fitted
+without a refusal (a concealed effect is discovery's to find, not the model error's to hide),
+and only calibration seeds (``accuracy.CALIBRATION_SEED_BASE`` on): the benchmark's scored
+seeds and the tests' never calibrate what they score. Printed: per parameter, the worlds,
+the RMS error, the RMS of the data's standard deviations, the model term.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
+from identify.model_error import TABLE_FILE, calibrate  # noqa: E402
+
+# name -> "relative" (error / truth) or "absolute" (error in the parameter's unit)
+KINDS = {"k_compression": "relative", "k_restitution": "relative", "restitution": "absolute",
+         "dz_contact": "absolute", "impact_speed": "relative",
+         "engine_impact.engine_mass": "relative", "engine_impact.gap": "absolute"}
+
+
+def errors_of(row: dict) -> dict[str, tuple[float, float]]:
+    """name -> (error, data std) of one world's row of ``accuracy.py --json``, in ``KINDS``'
+    terms (fractions of the truth, or the parameter's unit). Absent: parameters held fixed,
+    and those the fit reported not identified (the model term covers what the tool claims).
+    A row from before the model's error was added has only ``std``: the data's."""
+    out = {}
+    for name, p in row.get("params", {}).items():
+        std = p.get("std_data", p.get("std"))
+        if name not in KINDS or not std or not p.get("identified", True):
+            continue
+        if KINDS[name] == "relative":
+            true = p["value"] / (1.0 + p["err"] / 100.0)
+            out[name] = (p["err"] / 100.0, std / true)
+        else:
+            out[name] = (p["err"], std)
+    speed_std = row.get("speed_std_data_pct", row.get("speed_std_pct"))
+    if speed_std:
+        out["impact_speed"] = (row["speed_err_pct"] / 100.0, speed_std / 100.0)
+    for name, e in (row.get("engine") or {}).items():
+        std = e.get("std_data", e.get("std"))
+        if name in KINDS and std and e.get("identified", True):
+            scale = e["true"] if KINDS[name] == "relative" else 1.0
+            out[name] = ((e["value"] - e["true"]) / scale, std / scale)
+    return out
+
+
+def model_error_table(rows: list[dict]) -> dict:
+    """The ``model_error.json`` document from calibration rows (clean, fitted ones count)."""
+    scored = [r["seed"] for r in rows if r["seed"] < CALIBRATION_SEED_BASE]
+    if scored:
+        raise SystemExit(f"calibrate_model_error: seeds {scored[:5]} are not calibration seeds "
+                         f"(>= {CALIBRATION_SEED_BASE}; the benchmark scores {SEED_BASE} on): refusing")
+    used = [r for r in rows if r["status"] == "ok" and r["effect"] == "clean"]
+    if not used:
+        raise SystemExit("calibrate_model_error: no clean world was fitted in these runs")
+    by_name: dict[str, list[tuple[float, float]]] = {}
+    for r in used:
+        for name, pair in errors_of(r).items():
+            by_name.setdefault(name, []).append(pair)
+    doc = {"relative": {}, "absolute": {}, "measured": {}}
+    for name, pairs in sorted(by_name.items()):
+        err, std = np.array(pairs).T
+        s = calibrate(err, std)
+        doc[KINDS[name]][name] = round(float(s), 5)
+        doc["measured"][name] = {"worlds": len(pairs), "kind": KINDS[name], "rms_error": float(np.sqrt(np.mean(err ** 2))),
+                                 "mean_error": float(np.mean(err)), "rms_std_data": float(np.sqrt(np.mean(std ** 2))),
+                                 "model_std": float(s)}
+    formats = sorted({r.get("format", "?") for r in used})
+    seeds = sorted(r["seed"] for r in used)
+    doc["source"] = (f"{len(used)} clean reference worlds ({', '.join(formats)}; seeds {seeds[0]}-{seeds[-1]}), "
+                     f"benchmarks/calibrate_model_error.py, {datetime.date.today().isoformat()}")
+    doc["seeds"] = seeds
+    return doc
+
+
+def read_rows(path: Path) -> list[dict]:
+    """The world rows of an ``accuracy.py --json`` file, or of its ``.partial.jsonl`` (one row
+    per line, written as the run goes)."""
+    if path.suffix == ".jsonl":
+        return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return json.loads(path.read_text())["rows"]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("runs", nargs="+", type=Path, help="accuracy.py --json files (or their .partial.jsonl) of calibration worlds")
+    ap.add_argument("--out", type=Path, default=TABLE_FILE)
+    ap.add_argument("--dry-run", action="store_true", help="print the table, write nothing")
+    a = ap.parse_args(argv)
+    rows = [row for path in a.runs for row in read_rows(path)]
+    doc = model_error_table(rows)
+    print(doc["source"])
+    print("| parameter | worlds | kind | RMS error | mean error | RMS data std | model std |")
+    print("|---|---|---|---|---|---|---|")
+    for name, m in doc["measured"].items():
+        print(f"| {name} | {m['worlds']} | {m['kind']} | {m['rms_error']:.4g} | {m['mean_error']:+.4g} | "
+              f"{m['rms_std_data']:.3g} | {m['model_std']:.3g} |")
+    if not a.dry_run:
+        a.out.write_text(json.dumps(doc, indent=1) + "\n")
+        print(f"written: {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,102 @@
+"""The model's own error (identify/model_error.py) and its calibration
+(benchmarks/calibrate_model_error.py), on hand-made numbers."""
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from identify.model_error import NONE, ModelError, calibrate, table
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
+from benchmarks.calibrate_model_error import errors_of, model_error_table  # noqa: E402
+
+
+def test_calibrate_finds_the_spread_the_data_std_does_not_explain():
+    """Errors drawn with a 5 % spread, each fit claiming 1 %: the model term is
+    sqrt(5^2 - 1^2) = 4.90 %, to the sampling error of 4000 draws (1.1 %)."""
+    rng = np.random.default_rng(11)
+    errors = rng.normal(0.0, 0.05, 4000)
+    assert calibrate(errors, np.full(4000, 0.01)) == pytest.approx(math.sqrt(0.05**2 - 0.01**2), rel=0.04)
+
+
+def test_calibrate_weighs_each_error_by_its_own_std():
+    """Two fits: one 0.1 off claiming 0.1 (z = 1 already), one 0.3 off claiming 0.1: the model
+    term s solves 0.01 / (0.01 + s^2) + 0.09 / (0.01 + s^2) = 2, s^2 = 0.04."""
+    assert calibrate([0.1, -0.3], [0.1, 0.1]) == pytest.approx(0.2, rel=1e-6)
+
+
+def test_calibrate_adds_nothing_when_the_data_std_covers_the_errors():
+    assert calibrate([0.01, -0.02, 0.005], [0.05, 0.05, 0.05]) == 0.0
+    assert calibrate([0.0, 0.0], [0.0, 0.0]) == 0.0
+
+
+def test_calibrate_refuses_what_it_cannot_weigh():
+    with pytest.raises(ValueError):
+        calibrate([], [])
+    with pytest.raises(ValueError):
+        calibrate([0.1, float("nan")], [0.1, 0.1])
+
+
+def test_model_std_is_relative_absolute_or_nothing_and_adds_in_quadrature():
+    me = ModelError(relative={"k_compression": 0.04}, absolute={"restitution": 0.01})
+    assert me.std("k_compression", -2.0e6) == pytest.approx(8.0e4)
+    assert me.std("restitution", 0.5) == 0.01
+    assert me.std("stiffness_zone.depth", 0.3) == 0.0
+    total, model = me.covering({"k_compression": 1e6, "restitution": 0.2, "x.y": 3.0},
+                               {"k_compression": 3e4, "restitution": 0.0, "x.y": 0.5})
+    assert total == pytest.approx({"k_compression": 5e4, "restitution": 0.01, "x.y": 0.5})
+    assert model == pytest.approx({"k_compression": 4e4, "restitution": 0.01, "x.y": 0.0})
+    assert NONE.covering({"k_compression": 1e6}, {"k_compression": 3e4})[0] == {"k_compression": 3e4}
+
+
+def test_the_shipped_table_names_its_calibration_worlds_and_only_parameters_the_fit_has():
+    """The table was measured on calibration seeds, none the benchmark scores or a test uses,
+    and lists only names the fit reports (a typo would silently add nothing)."""
+    from identify.candidates.engine_impact import CANDIDATE
+    from identify.model import NUISANCE, base_parameters
+
+    doc = json.loads((ROOT / "identify" / "model_error.json").read_text())
+    assert doc["seeds"] and min(doc["seeds"]) >= CALIBRATION_SEED_BASE
+    assert str(doc["seeds"][0]) in doc["source"]
+    known = {p.name for p in base_parameters()} | set(NUISANCE) | {p.name for p in CANDIDATE.parameters}
+    t = table()
+    assert set(t.relative) | set(t.absolute) <= known
+    assert t.relative["k_compression"] > 0
+
+
+def _row(seed, effect="clean", status="ok", not_identified=(), **params):
+    return {"seed": seed, "effect": effect, "status": status, "format": "isomme",
+            "speed_err_pct": 0.2, "speed_std_pct": 0.5, "speed_std_data_pct": 0.1,
+            "params": {name: {"value": v, "err": e, "std": 10 * s, "std_data": s, "identified": name not in not_identified}
+                       for name, (v, e, s) in params.items()},
+            "engine": {"engine_impact.engine_mass": {"value": 150.0, "true": 200.0, "std": 9.0, "std_data": 4.0}}}
+
+
+def test_calibration_rows_convert_to_fractions_of_the_truth_and_absolute_units():
+    """k_compression fitted 1.05e6 (+5 %, so truth 1e6) +- 2e4: error 0.05, std 0.02 of the
+    truth; the restitution in its own unit; speed and engine mass as fractions; the data's std,
+    never the reported total."""
+    out = errors_of(_row(CALIBRATION_SEED_BASE, k_compression=(1.05e6, 5.0, 2e4), restitution=(0.2, -0.01, 0.004)))
+    assert out["k_compression"] == pytest.approx((0.05, 0.02))
+    assert out["restitution"] == pytest.approx((-0.01, 0.004))
+    assert out["impact_speed"] == pytest.approx((0.002, 0.001))
+    assert out["engine_impact.engine_mass"] == pytest.approx((-0.25, 0.02))
+
+
+def test_calibration_counts_identified_values_of_clean_fitted_calibration_worlds_only():
+    base = CALIBRATION_SEED_BASE
+    rows = [_row(base, k_compression=(1.05e6, 5.0, 1e-9)), _row(base + 1, k_compression=(0.95e6, -5.0, 1e-9)),
+            _row(base + 4, not_identified=("k_compression",), k_compression=(3e6, 200.0, 1e5)),  # claims nothing
+            _row(base + 2, effect="stiffness_zone", k_compression=(2e6, 100.0, 1e-9)),
+            _row(base + 3, status="refused")]
+    doc = model_error_table(rows)
+    assert doc["relative"]["k_compression"] == pytest.approx(0.05, rel=1e-4)
+    assert doc["measured"]["k_compression"]["worlds"] == 2 and doc["seeds"] == [base, base + 1, base + 4]
+    with pytest.raises(SystemExit, match="not calibration seeds"):
+        model_error_table(rows + [_row(SEED_BASE, k_compression=(1e6, 0.0, 1.0))])
