@@ -102,6 +102,9 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
             tracks = ident.recording.tracks
             row["tracking"] = tracking_errors(tracks.channels["x_m"], tracks.contact_frame, truth)
             row["fit_contact_err_ms"] = row["tracking"]["video_contact_err_ms"] + doc["contact_time_ms"]
+            contact = doc.get("nuisance", {}).get("contact_time", {})
+            if contact.get("std_data"):
+                row["contact_std_data_ms"] = 1e3 * contact["std_data"]
         row["speed_err_pct"] = 100.0 * (doc["impact_speed_kmh"] / truth["v0_kmh"] - 1.0)
         row["speed_std_pct"] = 100.0 * doc.get("impact_speed_std_kmh", 0.0) / truth["v0_kmh"]
         speed = doc.get("nuisance", {}).get("impact_speed", {})

@@ -2,9 +2,13 @@
 ``identify/model_error.json`` (run by hand):
 
     python benchmarks/accuracy.py --calibration --effect clean --n 16 --format isomme --json cal.json
-    python benchmarks/calibrate_model_error.py cal.json [more.json ...] [--dry-run]
+    python benchmarks/accuracy.py --calibration --effect clean --n 24 --format film --json cal_film.json
+    python benchmarks/calibrate_model_error.py cal.json cal_film.json [--dry-run]
 
-For each parameter of ``KINDS``, the fits' errors against the world's truth and the fits'
+One table per kind of recording (film, sensors: ``identify.model_error.KINDS``); a kind the
+given runs do not have keeps the table it had.
+
+For each parameter of ``SCALE_OF``, the fits' errors against the world's truth and the fits'
 own standard deviations (the data's alone, ``std_data``) give the model-form standard
 deviation that makes the errors' mean square one combined standard deviation
 (``identify.model_error.calibrate``): relative for a stiffness, a mass and the speed,
@@ -30,23 +34,25 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
 from identify.model_error import TABLE_FILE, calibrate  # noqa: E402
 
+FORMAT_KIND = {"film": "film", "isomme": "sensors"}  # accuracy.py's --format -> model_error.KINDS
+
 # name -> "relative" (error / truth) or "absolute" (error in the parameter's unit)
-KINDS = {"k_compression": "relative", "k_restitution": "relative", "restitution": "absolute",
-         "dz_contact": "absolute", "impact_speed": "relative",
+SCALE_OF = {"k_compression": "relative", "k_restitution": "relative", "restitution": "absolute",
+         "dz_contact": "absolute", "impact_speed": "relative", "contact_time": "absolute",
          "engine_impact.engine_mass": "relative", "engine_impact.gap": "absolute"}
 
 
 def errors_of(row: dict) -> dict[str, tuple[float, float]]:
-    """name -> (error, data std) of one world's row of ``accuracy.py --json``, in ``KINDS``'
+    """name -> (error, data std) of one world's row of ``accuracy.py --json``, in ``SCALE_OF``'
     terms (fractions of the truth, or the parameter's unit). Absent: parameters held fixed,
     and those the fit reported not identified (the model term covers what the tool claims).
     A row from before the model's error was added has only ``std``: the data's."""
     out = {}
     for name, p in row.get("params", {}).items():
         std = p.get("std_data", p.get("std"))
-        if name not in KINDS or not std or not p.get("identified", True):
+        if name not in SCALE_OF or not std or not p.get("identified", True):
             continue
-        if KINDS[name] == "relative":
+        if SCALE_OF[name] == "relative":
             true = p["value"] / (1.0 + p["err"] / 100.0)
             out[name] = (p["err"] / 100.0, std / true)
         else:
@@ -54,16 +60,29 @@ def errors_of(row: dict) -> dict[str, tuple[float, float]]:
     speed_std = row.get("speed_std_data_pct", row.get("speed_std_pct"))
     if speed_std:
         out["impact_speed"] = (row["speed_err_pct"] / 100.0, speed_std / 100.0)
+    if row.get("fit_contact_err_ms") is not None and row.get("contact_std_data_ms"):  # a film's, s
+        out["contact_time"] = (row["fit_contact_err_ms"] / 1e3, row["contact_std_data_ms"] / 1e3)
     for name, e in (row.get("engine") or {}).items():
         std = e.get("std_data", e.get("std"))
-        if name in KINDS and std and e.get("identified", True):
-            scale = e["true"] if KINDS[name] == "relative" else 1.0
+        if name in SCALE_OF and std and e.get("identified", True):
+            scale = e["true"] if SCALE_OF[name] == "relative" else 1.0
             out[name] = ((e["value"] - e["true"]) / scale, std / scale)
     return out
 
 
+def model_error_tables(rows: list[dict], before: dict | None = None) -> dict:
+    """The ``model_error.json`` document: one table per kind of recording among ``rows``
+    (``FORMAT_KIND``), the kinds they do not have kept from ``before`` (the file as it was)."""
+    tables = dict((before or {}).get("tables", {}))
+    for fmt, kind in FORMAT_KIND.items():
+        mine = [r for r in rows if r.get("format") == fmt]
+        if mine:
+            tables[kind] = model_error_table(mine)
+    return {"tables": tables}
+
+
 def model_error_table(rows: list[dict]) -> dict:
-    """The ``model_error.json`` document from calibration rows (clean, fitted ones count)."""
+    """One kind of recording's table from its calibration rows (clean, fitted ones count)."""
     scored = [r["seed"] for r in rows if r["seed"] < CALIBRATION_SEED_BASE]
     if scored:
         raise SystemExit(f"calibrate_model_error: seeds {scored[:5]} are not calibration seeds "
@@ -79,8 +98,8 @@ def model_error_table(rows: list[dict]) -> dict:
     for name, pairs in sorted(by_name.items()):
         err, std = np.array(pairs).T
         s = calibrate(err, std)
-        doc[KINDS[name]][name] = round(float(s), 5)
-        doc["measured"][name] = {"worlds": len(pairs), "kind": KINDS[name], "rms_error": float(np.sqrt(np.mean(err ** 2))),
+        doc[SCALE_OF[name]][name] = round(float(s), 5)
+        doc["measured"][name] = {"worlds": len(pairs), "kind": SCALE_OF[name], "rms_error": float(np.sqrt(np.mean(err ** 2))),
                                  "mean_error": float(np.mean(err)), "rms_std_data": float(np.sqrt(np.mean(std ** 2))),
                                  "model_std": float(s)}
     formats = sorted({r.get("format", "?") for r in used})
@@ -106,13 +125,15 @@ def main(argv=None) -> int:
     ap.add_argument("--dry-run", action="store_true", help="print the table, write nothing")
     a = ap.parse_args(argv)
     rows = [row for path in a.runs for row in read_rows(path)]
-    doc = model_error_table(rows)
-    print(doc["source"])
-    print("| parameter | worlds | kind | RMS error | mean error | RMS data std | model std |")
-    print("|---|---|---|---|---|---|---|")
-    for name, m in doc["measured"].items():
-        print(f"| {name} | {m['worlds']} | {m['kind']} | {m['rms_error']:.4g} | {m['mean_error']:+.4g} | "
-              f"{m['rms_std_data']:.3g} | {m['model_std']:.3g} |")
+    before = json.loads(a.out.read_text()) if a.out.exists() else None
+    doc = model_error_tables(rows, before)
+    for kind, table in doc["tables"].items():
+        print(f"\n{kind}: {table['source']}")
+        print("| parameter | worlds | kind | RMS error | mean error | RMS data std | model std |")
+        print("|---|---|---|---|---|---|---|")
+        for name, m in table["measured"].items():
+            print(f"| {name} | {m['worlds']} | {m['kind']} | {m['rms_error']:.4g} | {m['mean_error']:+.4g} | "
+                  f"{m['rms_std_data']:.3g} | {m['model_std']:.3g} |")
     if not a.dry_run:
         a.out.write_text(json.dumps(doc, indent=1) + "\n")
         print(f"written: {a.out}")

@@ -24,7 +24,7 @@ import optimistix as optx
 
 from identify.errors import UserError
 from identify.measurement import Measurement
-from identify.model_error import ModelError
+from identify.model_error import ModelError, kind_of
 from identify.model_error import table as model_error_table
 from identify.least_squares import channel_residuals, parameter_covariance, prior_residuals, weighted_offset
 from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
@@ -303,7 +303,8 @@ def fit(
     priors : name -> (value, sigma) in physical units: what is known of a fitted quantity
         before the fit (a vehicle file's estimate), a residual (fitted - value) / sigma.
     model_error : the model's own error added to the standard deviations (default the
-        calibrated ``identify.model_error.table()``; ``model_error.NONE``: the data's alone).
+        calibrated table of the measurement's kind, ``identify.model_error``;
+        ``model_error.NONE``: the data's alone).
 
     Returns
     -------
@@ -410,7 +411,7 @@ def fit(
 
     names = tuple(p.name for p in free)
     std_data = dict(zip(names, map(float, unc.std)))
-    std, std_model = (model_error or model_error_table()).covering(values, std_data)
+    std, std_model = (model_error or model_error_table(kind_of(measurement))).covering(values, std_data)
     result = FitResult(
         names=names,
         units={p.name: p.unit for p in free},

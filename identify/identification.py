@@ -353,6 +353,9 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         warnings = check_film_against_vehicle(rec.tracks, veh, vehicle_label(vehicle), force=force)
         for w in warnings:
             say(f"warning: {w}")
+    from identify.wheel_spin import without_spinning_wheels
+
+    rec = dataclasses.replace(rec, measurement=without_spinning_wheels(rec.measurement, float(veh.wheel_radius)))
     free, held = free_parameters(rec.measurement, speed_mps)
     found = None
     if discover:

@@ -9,13 +9,16 @@ whose truth is known and that the model did not make, and added in quadrature,
 
     std^2 = std_data^2 + std_model^2,   std_model = relative * |value|  or  absolute,
 
-so each parameter reports ``std`` (total), ``std_data`` and ``std_model``. The table
-(``model_error.json`` beside this file) is written by ``benchmarks/calibrate_model_error.py``
-from ``benchmarks/accuracy.py --calibration`` runs (their seeds are neither the scored
-benchmark's nor any test's) and names the worlds it came from. A parameter the table does
-not list (a discovered mechanism's) carries no model term: its std is the data's alone.
-It is the reference world's model error: a real car may differ from our model more, never
-known to be less.
+so each parameter reports ``std`` (total), ``std_data`` and ``std_model``. There is one table
+per kind of recording (``KINDS``): what the error does to a parameter depends on what was
+measured (positions on film, or accelerations), and a film's table also holds what the video
+stage gets wrong systematically (its contact, its scale). The tables (``model_error.json``
+beside this file) are written by ``benchmarks/calibrate_model_error.py`` from
+``benchmarks/accuracy.py --calibration`` runs (their seeds are neither the scored benchmark's
+nor any test's) and name the worlds they came from. A parameter a table does not list (a
+discovered mechanism's) carries no model term: its std is the data's alone. It is the
+reference world's model error: a real car may differ from our model more, never known to be
+less.
 """
 
 from __future__ import annotations
@@ -29,6 +32,8 @@ from pathlib import Path
 import numpy as np
 
 TABLE_FILE = Path(__file__).with_name("model_error.json")
+# what a recording measured: the car's position (a film, its tracks) or its accelerations
+KINDS = ("film", "sensors")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,10 +65,16 @@ class ModelError:
 NONE = ModelError(source="none: the data's standard deviations alone")
 
 
+def kind_of(measurement) -> str:
+    """"film" when the recording measured the car's position (x_m fitted: a film or its
+    tracks), "sensors" when the position was integrated from accelerometers or is absent."""
+    return "film" if "x_m" in measurement.channels and "x_m" not in measurement.derived else "sensors"
+
+
 @functools.cache
-def table(path: Path = TABLE_FILE) -> ModelError:
-    """The calibrated table (read once)."""
-    doc = json.loads(Path(path).read_text())
+def table(kind: str, path: Path = TABLE_FILE) -> ModelError:
+    """The calibrated table of recordings of ``kind`` (``KINDS``; read once)."""
+    doc = json.loads(Path(path).read_text())["tables"][kind]
     return ModelError(relative=dict(doc["relative"]), absolute=dict(doc["absolute"]), source=doc["source"])
 
 

@@ -236,7 +236,7 @@ def test_the_calibrated_model_error_is_added_in_quadrature_and_can_decide_identi
     data's std and to the covariance's diagonal, and a parameter whose model error exceeds its
     limit is not identified, saying so, however well the data fix it."""
     r = fit(paper_measurement, a4)
-    me = table()
+    me = table("film")  # the recording measured positions
     assert r.std_data == pytest.approx(paper_fit.std_data, rel=1e-6)
     for name in r.names:
         model = me.std(name, r.values[name])

@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from identify.model_error import NONE, ModelError, calibrate, table
+from identify.model_error import KINDS, NONE, ModelError, calibrate, kind_of, table
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
-from benchmarks.calibrate_model_error import errors_of, model_error_table  # noqa: E402
+from benchmarks.calibrate_model_error import errors_of, model_error_table, model_error_tables  # noqa: E402
 
 
 def test_calibrate_finds_the_spread_the_data_std_does_not_explain():
@@ -55,19 +55,30 @@ def test_model_std_is_relative_absolute_or_nothing_and_adds_in_quadrature():
     assert NONE.covering({"k_compression": 1e6}, {"k_compression": 3e4})[0] == {"k_compression": 3e4}
 
 
-def test_the_shipped_table_names_its_calibration_worlds_and_only_parameters_the_fit_has():
-    """The table was measured on calibration seeds, none the benchmark scores or a test uses,
-    and lists only names the fit reports (a typo would silently add nothing)."""
+@pytest.mark.parametrize("kind", KINDS)
+def test_each_shipped_table_names_its_calibration_worlds_and_only_parameters_the_fit_has(kind):
+    """Each kind's table was measured on calibration seeds, none the benchmark scores or a
+    test uses, and lists only names the fit reports (a typo would silently add nothing)."""
     from identify.candidates.engine_impact import CANDIDATE
     from identify.model import NUISANCE, base_parameters
 
-    doc = json.loads((ROOT / "identify" / "model_error.json").read_text())
+    doc = json.loads((ROOT / "identify" / "model_error.json").read_text())["tables"][kind]
     assert doc["seeds"] and min(doc["seeds"]) >= CALIBRATION_SEED_BASE
     assert str(doc["seeds"][0]) in doc["source"]
     known = {p.name for p in base_parameters()} | set(NUISANCE) | {p.name for p in CANDIDATE.parameters}
-    t = table()
+    t = table(kind)
     assert set(t.relative) | set(t.absolute) <= known
     assert t.relative["k_compression"] > 0
+
+
+def test_a_recording_of_positions_takes_the_film_table_one_of_accelerations_the_sensors_table():
+    from identify.measurement import Measurement
+
+    t = np.linspace(0.0, 0.1, 5)
+    film = Measurement(t=t, channels={"x_m": t}, sigma={"x_m": np.full(5, 1e-3)})
+    sensors = Measurement(t=t, channels={"x_m": t, "vx_mps": t}, sigma={"x_m": np.full(5, 1e-3), "vx_mps": np.full(5, 0.1)},
+                          derived=("x_m",))
+    assert kind_of(film) == "film" and kind_of(sensors) == "sensors"
 
 
 def _row(seed, effect="clean", status="ok", not_identified=(), **params):
@@ -87,6 +98,9 @@ def test_calibration_rows_convert_to_fractions_of_the_truth_and_absolute_units()
     assert out["restitution"] == pytest.approx((-0.01, 0.004))
     assert out["impact_speed"] == pytest.approx((0.002, 0.001))
     assert out["engine_impact.engine_mass"] == pytest.approx((-0.25, 0.02))
+    assert "contact_time" not in out  # a film's: the row of a film has the contact's error and std
+    film = errors_of({**_row(CALIBRATION_SEED_BASE), "fit_contact_err_ms": 4.0, "contact_std_data_ms": 0.5})
+    assert film["contact_time"] == pytest.approx((0.004, 0.0005))
 
 
 def test_calibration_counts_identified_values_of_clean_fitted_calibration_worlds_only():
@@ -100,3 +114,12 @@ def test_calibration_counts_identified_values_of_clean_fitted_calibration_worlds
     assert doc["measured"]["k_compression"]["worlds"] == 2 and doc["seeds"] == [base, base + 1, base + 4]
     with pytest.raises(SystemExit, match="not calibration seeds"):
         model_error_table(rows + [_row(SEED_BASE, k_compression=(1e6, 0.0, 1.0))])
+
+
+def test_calibrating_one_kind_of_recording_keeps_the_other_kinds_table():
+    base = CALIBRATION_SEED_BASE
+    rows = [dict(_row(base, k_compression=(1.05e6, 5.0, 1e-9)), format="film")]
+    before = {"tables": {"sensors": {"relative": {"k_compression": 0.01}}, "film": {"relative": {}}}}
+    doc = model_error_tables(rows, before)
+    assert doc["tables"]["sensors"] == before["tables"]["sensors"]
+    assert doc["tables"]["film"]["relative"]["k_compression"] == pytest.approx(0.05, rel=1e-4)
