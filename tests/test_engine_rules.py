@@ -31,6 +31,11 @@ def test_engine_priors_come_from_the_vehicle_file_and_a_gap_only_from_it(a4):
     assert p["engine_impact.engine_mass"][0] == pytest.approx(ENGINE_MASS_FRACTION * 1500.0)
     # a typical gap is where the fit starts, never a prior: nothing was measured
     assert "engine_impact.gap" not in p and engine_typical(bare)["engine_impact.gap"] == ENGINE_GAP_M
+    assert engine_typical(bare)["engine_impact.engine_mass"] == pytest.approx(ENGINE_MASS_FRACTION * 1500.0)
+    # a file's own values start the fit, whatever the typical ones (a gap other than the typical 0.35 m)
+    stated = SimpleNamespace(engine_mass=240.0, engine_gap=0.52, mass=1500.0)
+    assert engine_typical(stated) == {"engine_impact.engine_mass": 240.0, "engine_impact.gap": 0.52}
+    assert engine_priors(stated)["engine_impact.gap"] == (0.52, 0.1)
 
 
 def test_a_pull_beyond_three_sigma_is_a_conflict_and_within_it_is_not():
