@@ -536,3 +536,32 @@ def test_each_candidates_parameters_are_its_mechanisms_fields_in_its_units_and_r
         for field, v in c.neutral.items():
             if c.mechanism is not None and v != "vehicle":
                 assert field in c.mechanism.units or field in c.mechanism.__dataclass_fields__, (c.effect, field)
+
+
+def test_the_candidates_start_from_the_current_models_crush_and_stiffness():
+    """Where a candidate's fit starts (a rule, on a hand-made model): a zone at half the
+    maximum crush with twice k_compression; blocked wheels at the model's crush where the
+    first front-wheel misfit window after contact starts (crush here 0.5 m/s x t), else where
+    the crush reaches the tyre (front overhang - wheel radius); a window before contact, on
+    another channel, or at a crush under 5 cm does not count."""
+    from identify.candidates.front_wheel_block import FRONT_ANGLE, wheels_stop_turning
+    from identify.candidates.stiffness_zone import half_the_crush, twice_the_stiffness
+
+    t = np.linspace(0.0, 0.2, 201)
+    fr = types.SimpleNamespace(trajectory=types.SimpleNamespace(t=t, crush=0.5 * t * (t < 0.16)),
+                               params=types.SimpleNamespace(k_compression=8.0e5), contact_time=0.002)
+    assert half_the_crush(fr, None, None) == pytest.approx(0.5 * 0.5 * 0.159, rel=1e-6)
+    assert twice_the_stiffness(fr, None, None) == pytest.approx(1.6e6)
+    vehicle = types.SimpleNamespace(front_overhang=0.95, wheel_radius=0.31)
+
+    def analysis(*windows):
+        return types.SimpleNamespace(windows=[types.SimpleNamespace(channel=c, start_ms=s) for c, s in windows])
+
+    tyre = 0.95 - 0.31
+    assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 122.0))) == pytest.approx(0.5 * 0.120)
+    assert wheels_stop_turning(fr, vehicle, None) == pytest.approx(tyre)
+    assert wheels_stop_turning(None, vehicle, analysis((FRONT_ANGLE, 122.0))) == pytest.approx(tyre)
+    assert wheels_stop_turning(fr, vehicle, analysis(("x_m", 122.0))) == pytest.approx(tyre)
+    assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 0.0), (FRONT_ANGLE, 122.0))) == pytest.approx(0.06)
+    assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 1.0), (FRONT_ANGLE, 122.0))) == pytest.approx(tyre)
+    assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 60.0))) == pytest.approx(tyre)  # 0.029 m: < 5 cm
