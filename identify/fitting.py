@@ -440,7 +440,7 @@ def fit(
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
     )
     result.identified = {**assess_identifiability(result, channels),
-                         **log_scale_identifiability(free, result.values, result.std, result.std_model)}
+                         **log_scale_identifiability(free, result.values, result.std, result.std_data, result.std_model)}
     # no silent bounds: a value the bound stopped is not a value the data gave
     result.at_bound = {p.name: where for p in free if (where := p.at_bound(result.values[p.name]))}
     for name, why in result.at_bound.items():
@@ -453,27 +453,27 @@ def fit(
     return result
 
 
-def log_scale_identifiability(free, values: dict, std: dict, std_model: dict | None = None) -> dict[str, tuple[bool, str]]:
+def log_scale_identifiability(free, values: dict, std: dict, std_data: dict | None = None,
+                              std_model: dict | None = None) -> dict[str, tuple[bool, str]]:
     """name -> (False, reason) for each log-scale parameter other than the collision
     parameters (a mechanism's stiffness, an engine's stiffnesses and mass) whose standard
     deviation exceeds ``LOG_SCALE_NOT_IDENTIFIED`` of its value: held to the standard of
-    k_compression. ``std_model``: the model's own part of ``std``, named in the reason when
-    it is the larger part."""
+    k_compression. ``std_data``, ``std_model``: the two parts of ``std``; the model's own
+    error is named in the reason when it is the larger."""
     out = {}
     for p in free:
         if p.transform == "log" and p.name not in NOT_IDENTIFIED and values[p.name] > 0:
             rel = std[p.name] / values[p.name]
             if not rel <= LOG_SCALE_NOT_IDENTIFIED:  # NaN too
-                why = (model_error_reason(values[p.name], std[p.name], (std_model or {}).get(p.name, 0.0), "relative")
-                       or "the recorded motion barely changes when it changes")
+                why = (model_error_reason(values[p.name], (std_data or std)[p.name], (std_model or {}).get(p.name, 0.0),
+                                          "relative") or "the recorded motion barely changes when it changes")
                 out[p.name] = (False, f"not identified (std {100 * rel:.0f} %): {why}")
     return out
 
 
-def model_error_reason(value: float, std: float, std_model: float, kind: str) -> str:
-    """Why a parameter is not identified when the model's own error is the larger part of its
-    ``std`` (``identify.model_error``), else ''."""
-    std_data = math.sqrt(max(std * std - std_model * std_model, 0.0))
+def model_error_reason(value: float, std_data: float, std_model: float, kind: str) -> str:
+    """Why a parameter is not identified when the model's own error ``std_model``
+    (``identify.model_error``) outweighs the data's ``std_data``, else ''."""
     if not std_model > std_data:
         return ""
 
@@ -510,7 +510,7 @@ def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool,
         if spread <= limit:
             out[name] = (True, "")
             continue
-        reason = model_error_reason(value, sd, result.std_model.get(name, 0.0), kind)
+        reason = model_error_reason(value, result.std_data.get(name, sd), result.std_model.get(name, 0.0), kind)
         if not reason and name in ("k_restitution", "restitution"):
             tr = result.trajectory
             stopped = np.flatnonzero(np.asarray(tr.vx) <= 0.0)

@@ -107,6 +107,12 @@ class Measurement:
         """Samples per second (median of the sample intervals)."""
         return float(1.0 / np.median(np.diff(self.t)))
 
+    @property
+    def measures_position(self) -> bool:
+        """Whether the car's position x was measured (a film, its tracks), not integrated from
+        accelerometers (a sensor recording) or absent."""
+        return "x_m" in self.channels and "x_m" not in self.derived
+
     def valid(self, name: str) -> np.ndarray:
         """(n,) bool, True where channel ``name`` has a value and a finite sigma."""
         return np.isfinite(self.channels[name]) & np.isfinite(self.sigma[name])

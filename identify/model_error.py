@@ -68,7 +68,7 @@ NONE = ModelError(source="none: the data's standard deviations alone")
 def kind_of(measurement) -> str:
     """"film" when the recording measured the car's position (x_m fitted: a film or its
     tracks), "sensors" when the position was integrated from accelerometers or is absent."""
-    return "film" if "x_m" in measurement.channels and "x_m" not in measurement.derived else "sensors"
+    return "film" if measurement.measures_position else "sensors"
 
 
 @functools.cache

@@ -57,7 +57,7 @@ def without_spinning_wheels(measurement, wheel_radius: float):
     (sigma NaN: not fitted; the samples stay in the measurement) and a note per wheel;
     unchanged without a wheel channel, without a measured x, or when no wheel runs ahead."""
     m = measurement
-    if "x_m" not in m.channels or "x_m" in m.derived:
+    if not m.measures_position:
         return m
     sigma, notes = dict(m.sigma), list(m.notes)
     changed = False
