@@ -222,6 +222,29 @@ def test_gradient_smoothing_is_0p3_radius_between_0p7_and_1p5_px():
     assert [gradient_smoothing(r) for r in (1.0, 3.0, 4.0, 10.0)] == pytest.approx([0.7, 0.9, 1.2, 1.5])
 
 
+@pytest.mark.parametrize("radius", [3.0, 4.0])
+def test_the_pre_smoothing_of_a_small_target_halves_its_centre_error_under_noise(radius):
+    """Small targets get a smoothing under 1.5 px (0.9 px at radius 3, 1.2 px at 4); it is
+    there to average the pixel noise before the gradients are taken. Measured RMS centre
+    error over 200 noisy copies (pixel noise 0.03 on a target of 0.05 and 0.95):
+    0.163 -> 0.077 px at radius 3, 0.119 -> 0.056 px at radius 4 (ratio 0.47). Asserted:
+    below 0.7 times the unsmoothed error. ``smooth_sigma=0`` is the documented "none"."""
+    from video.targets import gradient_smoothing
+
+    c = np.array([40.3, 39.6])
+    base = draw_targets((80, 80), [c], [radius], [0.4])
+
+    def rms_error(smooth_sigma):
+        rng = np.random.default_rng(5)
+        err = []
+        for _ in range(200):
+            img = (base + rng.normal(0.0, 0.03, base.shape)).astype(np.float32)
+            err.append(refine_gradient(img, c + rng.uniform(-0.5, 0.5, 2), radius, smooth_sigma=smooth_sigma) - c)
+        return float(np.sqrt(np.mean(np.sum(np.square(err), axis=1))))
+
+    assert rms_error(gradient_smoothing(radius)) < 0.7 * rms_error(0.0)
+
+
 def test_centre_sigma_and_refine_say_nan_when_the_window_leaves_the_image():
     c = np.array([8.3, 40.2])  # 8 px from the left edge, radius 12 px
     img = to_gray(draw_targets((80, 80), [c], [12.0], [0.4]))

@@ -314,8 +314,8 @@ def refine_gradient(gray: np.ndarray, centre: np.ndarray, radius: float,
         Disc radius, px.
     iterations : int
     smooth_sigma : float, optional
-        Gaussian pre-smoothing of the patch, px (reduces noise, keeps the saddle);
-        default :func:`gradient_smoothing`.
+        Gaussian pre-smoothing of the patch, px (reduces noise, keeps the saddle); 0 for
+        none; default :func:`gradient_smoothing`.
 
     Returns
     -------
