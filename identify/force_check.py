@@ -13,6 +13,12 @@ itself; comparing the model's predicted force with it is a test nobody can tune 
   cells like a prediction, it shows how much of the force's mismatch no one-body model
   fitted to the motion can remove (the car is not rigid: its engine and cabin stop at
   different times);
+- :func:`two_body_force`: the same for a car of two rigid bodies, the engine (its own X
+  accelerometers, a given mass) and the cabin (the rest of the test mass): what a model of a
+  cabin and an engine fitting both measured motions exactly would predict; and
+  :func:`engine_mass_matching_the_barrier`, the engine mass for which that curve comes
+  nearest the load cells (least squares) and how near: the floor under any such model's
+  RMS error;
 - :func:`compare_forces`: peak force and impulse errors, the RMS error over the peak
   (NRMSE) and the ISO/TS 18571 objective rating (:func:`iso18571`);
 - :func:`write_forces_csv`, :func:`plot_force_time`, :func:`plot_force_crush`: the
@@ -53,6 +59,7 @@ import csv
 import math
 import os
 import tempfile
+import textwrap
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -61,6 +68,7 @@ import numpy as np
 from identify.errors import UserError
 
 __all__ = ["BarrierForce", "Iso18571", "ForceComparison", "measured_force", "momentum_check", "rigid_body_force",
+           "two_body_force", "engine_mass_matching_the_barrier",
            "iso18571", "compare_forces", "end_of_contact", "model_force", "write_forces_csv",
            "plot_force_time", "plot_force_crush", "check_forces", "force_check_document"]
 
@@ -213,6 +221,80 @@ def rigid_body_force(test, t_contact: float | None = None, cfc: int = 60) -> tup
         t_contact, _ = contact_time(test)
     force = -float(test.mass_kg) * filter_cfc(a, 1.0 / np.median(np.diff(t)), cfc)
     return t - t_contact, force
+
+
+def _two_body_parts(test, t_contact: float, cfc: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(t (s since contact), -m a_cabin (N), a_cabin - a_engine (m/s^2)) on the engine
+    channels' clock, both accelerations offset-free and filtered with ``cfc``: the two-body
+    force for an engine of mass m_e is the second plus m_e times the third."""
+    from identify.recordings.motion import combine, filter_cfc
+
+    if not test.mass_kg:
+        raise UserError(f"{test.source}: the header gives no test mass; the two-body force needs it")
+    if not test.engine:
+        raise UserError(f"{test.source}: the test has no engine accelerometer; the two-body force needs one")
+    t, a = combine(test.vehicle, "mean", "vehicle accelerations", test.source)
+    te, ae = combine(test.engine, "mean", "engine accelerations", test.source)
+    fs = 1.0 / np.median(np.diff(t))
+    cabin = np.interp(te, t, filter_cfc(a, fs, cfc))
+    engine = filter_cfc(ae, 1.0 / np.median(np.diff(te)), cfc)
+    return te - t_contact, -float(test.mass_kg) * cabin, cabin - engine
+
+
+def two_body_force(test, engine_mass_kg: float, t_contact: float | None = None,
+                   cfc: int = 60) -> tuple[np.ndarray, np.ndarray]:
+    """The contact force a car of two rigid bodies needs to move as its accelerometers say.
+
+    F = -(m - m_e) a_cabin - m_e a_engine: the engine (mass ``engine_mass_kg``) moves as the
+    mean of its X accelerometers, the rest of the test mass as the cabin's; the forces between
+    the two bodies (mounts, the parts crushed between them) cancel in the sum, so any model of
+    a cabin and an engine that fits both measured motions exactly predicts this curve, whatever
+    its force laws. With m_e = 0 it is :func:`rigid_body_force`.
+
+    Parameters
+    ----------
+    test : identify.recordings.SensorTest
+        With a test mass and engine channels (``test.engine``, on the vehicle channels' clock).
+    engine_mass_kg : float
+        kg.
+    t_contact : float, optional
+        First contact on the recording's time base, s; default
+        ``identify.recordings.contact_time(test)``.
+    cfc : int
+        SAE J211 class (60, as the barrier force).
+
+    Returns
+    -------
+    t : (n,) float64
+        Time since first contact, s; it ends where the engine channels end.
+    force : (n,) float64
+        N, positive when the car decelerates.
+    """
+    from identify.recordings.motion import contact_time
+
+    if t_contact is None:
+        t_contact, _ = contact_time(test)
+    t, rigid, difference = _two_body_parts(test, t_contact, cfc)
+    return t, rigid + float(engine_mass_kg) * difference
+
+
+def engine_mass_matching_the_barrier(force: BarrierForce, test, t_contact: float,
+                                     window_s: tuple[float, float]) -> tuple[float, float]:
+    """The engine mass (kg, within 0 and the test mass) for which :func:`two_body_force` comes
+    nearest the load cells over ``window_s`` (s since contact; least squares on the 10 kHz
+    grid of :func:`compare_forces`), and that curve's RMS error over the measured peak (1).
+
+    The two-body force is linear in the engine mass, F_r + m_e D, so the best mass is
+    -sum(D (F_r - F_measured)) / sum(D^2), clipped to [0, m]. No model of a cabin and an
+    engine that fits both motions exactly can predict the load cells with a smaller RMS error.
+    """
+    t, rigid, difference = _two_body_parts(test, t_contact, force.cfc)
+    t0, t1 = window_s
+    grid = np.arange(t0, t1 + 0.5 / ISO_RATE_HZ, 1.0 / ISO_RATE_HZ)
+    fm = np.interp(grid, force.t, force.force)
+    fr, d = np.interp(grid, t, rigid), np.interp(grid, t, difference)
+    mass = float(np.clip(-np.sum(d * (fr - fm)) / max(float(np.sum(d * d)), 1e-30), 0.0, float(test.mass_kg)))
+    return mass, float(np.sqrt(np.mean((fr + mass * d - fm) ** 2)) / np.max(fm))
 
 
 def momentum_check(force: BarrierForce, mass_kg: float, t: np.ndarray, v: np.ndarray) -> dict[str, float]:
@@ -455,15 +537,19 @@ def _figure():
 
 
 def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceComparison | None = None,
-                    title: str = "", rigid=None, base=None, base_label: str = "base model, before discovery") -> None:
+                    title: str = "", rigid=None, base=None, base_label: str = "base model, before discovery",
+                    two_body=None, two_body_label: str = "") -> None:
     """PNG of measured and predicted force (kN) against time (ms); optional (t_ms, N)
-    curves: ``rigid`` (:func:`rigid_body_force`, thin grey) and ``base`` (the base model
+    curves: ``rigid`` (:func:`rigid_body_force`, thin grey), ``two_body``
+    (:func:`two_body_force`, thin green, ``two_body_label``) and ``base`` (the base model
     before discovery, or the one-body model beside a two-body one: ``base_label``, dashed)."""
     plt = _figure()
     fig, ax = plt.subplots(figsize=(8, 4.5))
     if rigid is not None:
         ax.plot(rigid[0], np.asarray(rigid[1]) / 1e3, color="0.6", lw=1.0,
                 label="test mass x measured deceleration (a rigid car, CFC 60)")
+    if two_body is not None:
+        ax.plot(two_body[0], np.asarray(two_body[1]) / 1e3, color="tab:green", lw=1.0, label=two_body_label)
     ax.plot(t_ms, np.asarray(measured_N) / 1e3, color="k", label="measured (barrier load cells, CFC 60)")
     if base is not None:
         ax.plot(base[0], np.asarray(base[1]) / 1e3, color="tab:blue", ls="--", lw=1.2,
@@ -473,7 +559,7 @@ def plot_force_time(path, t_ms, measured_N, predicted_N, comparison: ForceCompar
     ax.set_ylabel("contact force (kN)")
     if comparison is not None:
         c = comparison
-        ax.set_title((title + "\n" if title else "") +
+        ax.set_title((textwrap.fill(title, 90) + "\n" if title else "") +
                      f"peak {c.peak_error:+.1%}, impulse {c.impulse_error:+.1%}, "
                      f"ISO 18571 rating {c.iso18571.overall:.2f}", fontsize=10)
     ax.axhline(0, color="0.8", lw=0.8)
@@ -537,7 +623,8 @@ def model_force(traj, contact_time_s: float, cfc: int) -> tuple[np.ndarray, np.n
 
 def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
                  contact_time_s: float = 0.0, title: str = "", rigid=None, base=None,
-                 base_label: str = "base model, before discovery") -> ForceComparison:
+                 base_label: str = "base model, before discovery", two_body=None,
+                 two_body_label: str = "") -> ForceComparison:
     """Compare a simulated trajectory's contact force, filtered with the load cells' CFC
     class, with the barrier's; write ``forces.csv``, ``force_time.png`` and
     ``force_crush.png`` into ``out_dir``.
@@ -563,6 +650,8 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
     base : (t (s), force (N)), optional
         The base model's :func:`model_force` when ``traj`` is a model with discovered
         mechanisms, drawn dashed in the force-time plot.
+    two_body : (t (s), force (N)), optional
+        :func:`two_body_force`, drawn in the force-time plot with ``two_body_label``.
 
     Returns
     -------
@@ -584,7 +673,7 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
         return None if curve is None else (grid * 1e3, np.interp(grid, curve[0], curve[1], left=0.0, right=0.0))
 
     plot_force_time(out / "force_time.png", grid * 1e3, fm_grid, fp_grid, comparison, title, on_grid(rigid),
-                    on_grid(base), base_label)
+                    on_grid(base), base_label, on_grid(two_body), two_body_label)
     end = comparison.window_ms[1] / 1e3
     tm = np.asarray(measurement.t)
     keep = tm <= end
@@ -600,7 +689,8 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
 
 
 def force_check_document(test, measurement, traj, out_dir: str | Path, contact_time_s: float = 0.0,
-                         title: str = "", base=None, base_label: str = "base model, before discovery") -> dict:
+                         title: str = "", base=None, base_label: str = "base model, before discovery",
+                         engine_mass: tuple[float, str] | None = None) -> dict:
     """Everything the force check produces for a fitted sensor test, in one call.
 
     Parameters
@@ -621,6 +711,9 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
         The base model's fit, when ``traj`` is a model with discovered mechanisms: scored
         too (``"base_model"``) and drawn in the force-time plot; or the one-body model beside
         a two-body one (``base_label`` says which, also in ``"base_model"["label"]``).
+    engine_mass : (kg, where it comes from), optional
+        For the two-body reference (:func:`two_body_force`) of a test with engine channels,
+        e.g. ``(230.0, "the vehicle file's")``.
 
     Returns
     -------
@@ -631,7 +724,12 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
         :func:`momentum_check`, with ``"per_accelerometer"``: channel code -> the error
         with that accelerometer's motion alone) and ``"rigid_body"`` (the
         ForceComparison of :func:`rigid_body_force`, what a one-body model fitting the
-        motion exactly would score).
+        motion exactly would score); with ``engine_mass`` and engine channels, ``"two_body"``:
+        the ForceComparison of :func:`two_body_force` with ``engine_mass_kg`` and
+        ``engine_mass_source``, and ``best_engine_mass_kg`` / ``best_nrmse``
+        (:func:`engine_mass_matching_the_barrier`), both over the fitted model's window so that
+        they compare with its numbers, or ``{"not_computed": why}`` when the engine channels
+        end before that window does.
     """
     from identify.recordings.motion import channel_motions, contact_time
 
@@ -647,11 +745,25 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
         doc["momentum_check"] = check
         rigid = rigid_body_force(test, t_contact, force.cfc)
         doc["rigid_body"] = compare_forces(force.t, force.force, *rigid).to_dict()
+    two_body, two_body_label = None, ""
+    if test.mass_kg and test.engine and engine_mass is not None:
+        two_body = two_body_force(test, engine_mass[0], t_contact, force.cfc)
+        two_body_label = f"cabin + engine of {engine_mass[0]:.0f} kg moving as measured (CFC {force.cfc})"
     base_curve = None
     if base is not None:
         base_curve = model_force(base[0], base[1], force.cfc)
         doc["base_model"] = {"label": base_label, **compare_forces(force.t, force.force, *base_curve).to_dict()}
     comparison = check_forces(force, traj, measurement, out_dir, contact_time_s, title, rigid, base_curve,
-                              base_label)
+                              base_label, two_body, two_body_label)
     doc.update(comparison.to_dict())
+    if two_body is not None:  # scored over the fitted model's window, so that the rows compare
+        window = (comparison.window_ms[0] / 1e3, comparison.window_ms[1] / 1e3)
+        if two_body[0][-1] < window[1]:
+            doc["two_body"] = {"not_computed": f"the engine channels end {two_body[0][-1] * 1e3:.1f} ms after"
+                                               f" contact, before the comparison's {window[1] * 1e3:.1f} ms"}
+        else:
+            best, best_nrmse = engine_mass_matching_the_barrier(force, test, t_contact, window)
+            doc["two_body"] = {"engine_mass_kg": float(engine_mass[0]), "engine_mass_source": engine_mass[1],
+                               **compare_forces(force.t, force.force, *two_body, window_s=window).to_dict(),
+                               "best_engine_mass_kg": best, "best_nrmse": best_nrmse}
     return doc

@@ -221,10 +221,15 @@ def write_results(out, ident: Identification, default_traj) -> Path:
                 base, base_label = (ident.one_body.trajectory, ident.one_body.contact_time), "one-body base model"
             elif start is not None and fr.model != start.model:
                 base = (start.trajectory, start.contact_time)
+            from identify.candidates.engine_impact import ENGINE_MASS_FRACTION, engine_typical
+
+            engine_mass = (engine_typical(vehicle)["engine_impact.engine_mass"],
+                           "the vehicle file's" if vehicle.engine_mass is not None
+                           else f"{100 * ENGINE_MASS_FRACTION:.0f} % of the vehicle's mass, typical")
             ident.document["force_check"] = force_check_document(
                 rec.sensor_test, fr.measurement, fr.trajectory, tmp, fr.contact_time,
                 title=f"{vehicle.name}: barrier load cells vs fitted model ({fr.model})", base=base,
-                base_label=base_label)
+                base_label=base_label, engine_mass=engine_mass)
             forces = ["force_time.png", "force_crush.png"]
         (tmp / "result.json").write_text(dumps(ident.document))
         if rec.tracks is not None:

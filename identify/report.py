@@ -142,6 +142,10 @@ def _force_check_lines(check: dict, doc: dict) -> list[str]:
         rows.append((check["base_model"].get("label", "base model, before discovery"), check["base_model"]))
     if "rigid_body" in check:
         rows.append(("a rigid car moving exactly as measured (test mass x measured deceleration)", check["rigid_body"]))
+    two = check.get("two_body", {})
+    if "nrmse" in two:
+        rows.append((f"a cabin and an engine moving exactly as measured (engine {two['engine_mass_kg']:.0f} kg,"
+                     f" {two['engine_mass_source']})", two))
     for label, c in rows:
         lines.append(f"| {label} | {c['peak_predicted_N'] / 1e3:.0f} kN at {c['peak_time_predicted_ms']:.0f} ms |"
                      f" {100 * c['peak_error']:+.1f} % | {100 * c['impulse_error']:+.1f} % |"
@@ -164,6 +168,17 @@ def _force_check_lines(check: dict, doc: dict) -> list[str]:
         lines.append("- the fitted model has two bodies, the cabin and the engine (`engine_impact`): its barrier force"
                      " is the structure's plus the engine block's, which a one-body model's (its mass times the"
                      " cabin's deceleration) cannot be; force vs crush shows each body's own curve")
+    if "nrmse" in two:
+        fitted = doc["parameters"].get("engine_impact.engine_mass")
+        fitted = (f" (the fit, from the motion alone: {fitted['value']:.0f} +- {fitted['std']:.0f} kg)"
+                  if fitted and fitted.get("std") is not None else "")
+        lines.append(f"- a model of a cabin and an engine that fits both measured motions exactly predicts the"
+                     f" two-body row's curve for its engine mass; the engine mass that brings that curve nearest"
+                     f" the load cells is {two['best_engine_mass_kg']:.0f} kg{fitted}, and even then its RMS"
+                     f" error is {100 * two['best_nrmse']:.1f} % of the peak: no two-body model fitting the"
+                     f" motion comes nearer")
+    elif "not_computed" in two:
+        lines.append(f"- no two-body reference: {two['not_computed']}")
     if "momentum_check" in check:
         mc = check["momentum_check"]
         each = mc.get("per_accelerometer", {})

@@ -132,5 +132,13 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     report = (out / "report.md").read_text()
     assert "one-body base model" in report and "a rigid car moving exactly as measured" in report
     assert "two bodies" in report
+    # the floor under any two-body model fitting the motion: the vehicle file's engine mass,
+    # scored where the fitted model is, and the least-squares mass no other mass beats
+    # (tests/test_force_check.py checks that floor by brute force); the report names both
+    two = check["two_body"]
+    assert two["engine_mass_kg"] == 230.0 and two["engine_mass_source"] == "the vehicle file's"
+    assert two["window_ms"] == check["window_ms"] and two["best_nrmse"] <= two["nrmse"]
+    assert "a cabin and an engine moving exactly as measured (engine 230 kg, the vehicle file's)" in report
+    assert f"nearest the load cells is {two['best_engine_mass_kg']:.0f} kg (the fit, from the motion alone:" in report
     # five random starts and the engine's second (out of the barrier's reach)
     assert doc["fit"]["starts"] == 6 and " of 6 starting points reached the best fit of the base model" in report

@@ -199,6 +199,12 @@ def test_force_time_names_measured_predicted_and_comparison_curves(tmp_path, fig
     assert ax.get_title() == "10146\npeak -10.0%, impulse +5.0%, ISO 18571 rating 0.80"
     plot_force_time(tmp_path / "c.png", t, measured, predicted, base=(t, base))  # the default label
     assert "base model, before discovery (same CFC)" in legend_texts(figures[-1].axes[0])
+    two = 0.95 * measured
+    plot_force_time(tmp_path / "d.png", t, measured, predicted, two_body=(t, two), two_body_label="cabin + engine")
+    curves = lines_by_label(figures[-1].axes[0])
+    assert list(curves) == legend_texts(figures[-1].axes[0]) == [
+        "cabin + engine", "measured (barrier load cells, CFC 60)", "predicted (model, same CFC)"]
+    np.testing.assert_allclose(curves["cabin + engine"].get_ydata(), two / 1e3)
 
 
 def test_force_crush_draws_in_the_units_it_names(tmp_path, figures):
