@@ -7,6 +7,8 @@ Steps, each a pure function over arrays:
   distances stay constant), and the direction of travel in the image;
 - ``rigid_fit``: least-squares rigid (Procrustes) fit of the body targets of a frame to
   their positions in the reference frame: rotation and translation, residual;
+- ``stabilise_on_fixed``: a camera shaken by the impact taken out of every track, from the
+  fixed targets' common motion;
 - ``body_pose``: image position of the CG and body rotation in every frame, with a
   one-sigma uncertainty from the detection noise and the fit residuals;
 - ``cg_from_hubs``: the CG's image position from the hub centres and the vehicle file;
@@ -37,6 +39,8 @@ __all__ = [
     "Roles",
     "classify_targets",
     "rigid_fit",
+    "Stabilised",
+    "stabilise_on_fixed",
     "BodyPose",
     "body_pose",
     "cg_from_hubs",
@@ -85,7 +89,7 @@ def _wrap(a):
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
-def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 2.0,
+def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0,
                      spin_rad: float = 0.5, rigid_px: float = 0.6,
                      rigid_rel: float = 0.002) -> Roles:
     """Separate fixed, hub and rigid-body targets from their tracks.
@@ -97,7 +101,9 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 2.0
     angle : (n, K) float
         Unwrapped pattern orientation per frame, rad (NaN where lost).
     fixed_px : float
-        A target whose centre never moves further than this from its median is fixed, px.
+        A target whose centre never moves further than this from its median is fixed, px:
+        wide enough for a camera shaken by the impact (a few px), far below the car's
+        travel (its approach and crush: tens of px at least).
     spin_rad : float
         A moving target whose pattern turns through more than this (beyond what the
         body turns) is on a wheel hub, rad.
@@ -221,6 +227,89 @@ def rigid_fit(ref: np.ndarray, cur: np.ndarray, weights: np.ndarray | None = Non
     R = _rot(phi)
     fitted = cc + a @ R.T
     return phi, rc, cc, cur - fitted
+
+
+@dataclass(frozen=True)
+class Stabilised:
+    """Target centres with the camera's own motion taken out (:func:`stabilise_on_fixed`).
+
+    Attributes
+    ----------
+    uv : (n, K, 2) float
+        Centres as an unmoving camera would have seen them, px.
+    sigma_px : (n, K) float
+        Their one-sigma uncertainty, the fixed targets' own added in quadrature, px.
+    shift_px : (n, 2) float
+        The camera's image motion removed per frame (at the fixed targets' centroid), px;
+        NaN where no fixed target was seen.
+    roll : (n,) float
+        The camera's roll removed per frame, rad (0 with one fixed target).
+    """
+
+    uv: np.ndarray
+    sigma_px: np.ndarray
+    shift_px: np.ndarray
+    roll: np.ndarray
+
+
+#: Fixed targets moving together by less than this are taken to stand still: no correction, px.
+SHAKE_MIN_PX = 0.3
+
+
+def stabilise_on_fixed(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray) -> Stabilised | None:
+    """Take a shaking camera's motion out of every target's track, using the fixed targets.
+
+    A camera shaken by the impact turns a little (a few tenths of a degree): every image
+    point moves by nearly the same shift and roll, whatever its depth, so the fixed targets'
+    (barrier, floor) motion in each frame is the camera's. Their reference positions are
+    their medians over the film; in each frame the rigid motion (rotation and translation,
+    :func:`rigid_fit`; translation alone with one fixed target) taking the reference onto
+    the seen fixed targets is inverted and applied to every target. The fixed targets'
+    detection noise enters every corrected centre: their sigma over the square root of their
+    number is added in quadrature.
+
+    Parameters
+    ----------
+    uv : (n, K, 2) float
+        Target centres per frame, px (NaN where lost).
+    sigma_px : (n, K) float
+        Their one-sigma uncertainty per axis, px.
+    fixed : (F,) int
+        Indices of the fixed targets (``Roles.kind == "fixed"``).
+
+    Returns
+    -------
+    Stabilised or None
+        None when there is no fixed target, or when the fixed targets never move together by
+        more than :data:`SHAKE_MIN_PX` (a still camera: correcting it would only add their
+        noise). Frames without a fixed target in view are left as they are (shift NaN).
+    """
+    uv = np.asarray(uv, dtype=float)
+    fixed = np.asarray(fixed, dtype=int)
+    if len(fixed) == 0:
+        return None
+    n = uv.shape[0]
+    ref = np.nanmedian(uv[:, fixed], axis=0)
+    out, sig = uv.copy(), np.asarray(sigma_px, dtype=float).copy()
+    shift = np.full((n, 2), np.nan)
+    roll = np.zeros(n)
+    for i in range(n):
+        seen = np.all(np.isfinite(uv[i, fixed]), axis=1) & np.all(np.isfinite(ref), axis=1)
+        if not seen.any():
+            continue
+        r, c = ref[seen], uv[i, fixed[seen]]
+        if seen.sum() >= 2:
+            phi, rc, cc, _ = rigid_fit(r, c)
+        else:
+            phi, rc, cc = 0.0, r[0], c[0]
+        shift[i], roll[i] = cc - rc, phi
+        out[i] = rc + (uv[i] - cc) @ _rot(phi)  # R(phi)^-1 applied to each row
+        noise = float(np.sqrt(np.mean(sigma_px[i, fixed[seen]] ** 2)) / np.sqrt(seen.sum()))
+        sig[i] = np.hypot(sig[i], noise)
+    lever = np.nanmax(np.abs(roll)) * float(np.max(np.ptp(ref, axis=0)) if len(fixed) > 1 else 0.0)
+    if not np.nanmax(np.hypot(*shift.T), initial=0.0) + lever > SHAKE_MIN_PX:
+        return None
+    return Stabilised(uv=out, sigma_px=sig, shift_px=shift, roll=roll)
 
 
 def _rot(phi: float) -> np.ndarray:

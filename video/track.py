@@ -86,6 +86,9 @@ class TrackerConfig:
         Largest accepted relative change of the radius.
     detect : TargetConfig
         Settings of the first frame's detection.
+    stabilise : bool
+        Take a camera shaken by the impact out of the tracks with the fixed targets
+        (``video.motion.stabilise_on_fixed``); off only to measure what it does.
     """
 
     search_px: float = 8.0
@@ -96,6 +99,7 @@ class TrackerConfig:
     min_contrast_ratio: float = 0.4
     radius_tolerance: float = 0.25
     detect: TargetConfig = field(default_factory=TargetConfig)
+    stabilise: bool = True
 
 
 @dataclass(frozen=True)
@@ -533,6 +537,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
         contact_time,
         crush_from_pose,
         impact_speed,
+        stabilise_on_fixed,
         to_car_plane,
         travel_axes,
     )
@@ -580,6 +585,21 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
 
     roles = classify_targets(uv, tt.angle)
     d = roles.direction
+    sigma_px = tt.sigma_px
+    fixed = np.flatnonzero(np.array(roles.kind) == "fixed")
+    stab = stabilise_on_fixed(uv, sigma_px, fixed) if config.stabilise else None
+    if stab is not None:
+        uv, sigma_px = stab.uv, stab.sigma_px
+        worst = int(np.nanargmax(np.hypot(*stab.shift_px.T)))
+        unseen = np.flatnonzero(~np.isfinite(stab.shift_px[:, 0]))
+        notes.append(f"camera motion taken out of every track from {len(fixed)} fixed target(s): up to "
+                     f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
+                     f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
+                     + (f"; not corrected in frame(s) {_runs_text(unseen)}, where no fixed target is seen"
+                        if len(unseen) else ""))
+    elif config.stabilise and not len(fixed):
+        notes.append("no fixed target (barrier, floor) in view: a camera shaken by the impact could not be "
+                     "taken out of the tracks")
     name = {k: f"target{k}" for k in range(len(first))}
     for k in range(len(first)):
         miss = np.flatnonzero(~np.isfinite(uv[:, k, 0]))
@@ -627,7 +647,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     if cg_src:
         notes.append(f"CG located from {cg_src}")
 
-    pose = body_pose(uv, tt.sigma_px, body, cg_uv, ref)
+    pose = body_pose(uv, sigma_px, body, cg_uv, ref)
     few = np.flatnonzero(pose.n_targets < 2)
     if len(few):
         notes.append(f"fewer than two body targets in frame(s) {_runs_text(few)}: "
