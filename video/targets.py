@@ -61,7 +61,8 @@ class TargetConfig:
     Attributes
     ----------
     min_radius_px, max_radius_px : float
-        Range of target radii to look for, px (50-150 mm targets at 2-5 mm/px: 5-38 px).
+        Range of target radii to look for, px (50-150 mm targets at 2-10 mm/px: 3-38 px;
+        a 73 mm target at 9 mm/px has a radius of 4.0 px).
     sigmas_px : tuple of float
         Gaussian scales of the saddle response, px; the response is the maximum over them.
     min_contrast : float
@@ -75,7 +76,7 @@ class TargetConfig:
         Iterations of the gradient-orthogonality centre refinement.
     """
 
-    min_radius_px: float = 4.0
+    min_radius_px: float = 3.0
     max_radius_px: float = 40.0
     sigmas_px: tuple = (1.5, 2.5)
     min_contrast: float = 0.15
