@@ -100,7 +100,7 @@ def main(argv=None) -> int:
             rows.append(row)
             print(f"[{time.perf_counter() - t0:6.0f} s] film {row['seed']}", file=sys.stderr, flush=True)
     print("| seed | fps | yaw deg | shake px | x RMS mm (px), shipped | baseline | contact ms, shipped | baseline |"
-          f" speed %, shipped | baseline |")
+          " speed %, shipped | baseline |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:
         cells = []
