@@ -268,3 +268,29 @@ def test_silhouette_not_found_raises():
 
 def test_find_tapes_ignores_plain_frame():
     assert find_tapes(np.full((120, 160), 90, np.uint8)) == []
+
+
+def test_an_outline_drawn_elsewhere_is_not_taken_for_the_car_when_its_targets_are_known():
+    """Reference world seed 910019: the outline matched the wall's grid 1.2 m above the car
+    (the car has no hub targets, so its CG came from that outline: x off by 1.2 m x pitch,
+    13 mm). Here a copy of the car's outline, drawn 130 px higher in hard black on white,
+    beats the car's own edges; the body targets' positions (points inside the true outline)
+    put the fit back on the car, and points no outline can hold are refused."""
+    from synth.scene import body_to_plane, project
+    img, car, cam, r = _render(1, 0.1, (640, 480))
+    true_poly = project(cam, body_to_plane(np.asarray(car.silhouette_side), car, r.pose(0.0), r.x_cg0),
+                        cam.distance_car, 1)
+    decoy = img.copy()
+    cv2.polylines(decoy, [np.round((true_poly - [0, 130]) * 16).astype(np.int32)], True, 255, 5, cv2.LINE_AA, 4)
+    cv2.polylines(decoy, [np.round((true_poly - [0, 130]) * 16).astype(np.int32)], True, 0, 2, cv2.LINE_AA, 4)
+    ws = project(cam, body_to_plane(np.array([car.windscreen_top]), car, r.pose(0.0), r.x_cg0),
+                 cam.distance_car, 1)[0]
+    fooled = fit_silhouette(decoy, car, scale_hint=cam.m_per_px, direction=1)
+    assert np.linalg.norm(fooled.windscreen_top_px - ws) > 100  # the decoy wins without the targets
+    centre = true_poly.mean(axis=0)
+    inside = centre + 0.5 * (true_poly[::4] - centre)  # points well inside the car's outline
+    sil = fit_silhouette(decoy, car, scale_hint=cam.m_per_px, direction=1, inside_px=inside)
+    assert np.linalg.norm(sil.windscreen_top_px - ws) < 0.5
+    with pytest.raises(VideoError, match="leaves 1 of the 2 body targets outside it"):
+        fit_silhouette(img, car, scale_hint=cam.m_per_px, direction=1,
+                       inside_px=np.array([centre, centre + [0.0, 0.45 * np.ptp(true_poly[:, 1])]]))

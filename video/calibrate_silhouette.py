@@ -144,9 +144,10 @@ def edge_distance(gray: np.ndarray) -> np.ndarray:
 
 
 def _coarse(dt: np.ndarray, poly: np.ndarray, scales_px_per_m: np.ndarray,
-            directions: tuple) -> tuple[float, int, np.ndarray, float]:
+            directions: tuple, inside_px: np.ndarray | None = None) -> tuple[float, int, np.ndarray, float]:
     """Best (k, direction, origin, cost) over scales and translations, by template
-    matching of the outline drawn at each scale against the distance transform."""
+    matching of the outline drawn at each scale against the distance transform; with
+    ``inside_px`` (M, 2), only placements whose bounding box holds those points."""
     h, w = dt.shape
     ds = max(1, int(round(max(w, h) / 320)))
     dts = cv2.resize(dt, (w // ds, h // ds), interpolation=cv2.INTER_AREA)
@@ -165,6 +166,14 @@ def _coarse(dt: np.ndarray, poly: np.ndarray, scales_px_per_m: np.ndarray,
             tplf = tpl.astype(np.float32)
             n = tplf.sum()
             res = cv2.matchTemplate(dts, tplf, cv2.TM_CCORR) / n
+            if inside_px is not None:  # the template's box [loc, loc + (tw, th)] must hold them
+                p = np.asarray(inside_px, float) / ds
+                cols, rows = np.arange(res.shape[1]), np.arange(res.shape[0])
+                ok_x = (cols >= p[:, 0].max() - (tw - 1)) & (cols <= p[:, 0].min())
+                ok_y = (rows >= p[:, 1].max() - (th - 1)) & (rows <= p[:, 1].min())
+                if not (ok_x.any() and ok_y.any()):
+                    continue
+                res = np.where(ok_y[:, None] & ok_x[None, :], res, np.float32(np.inf))
             mn, _, loc, _ = cv2.minMaxLoc(res)
             if mn < best[0]:
                 origin = (np.array(loc, float) - lo + 1) * ds
@@ -178,7 +187,7 @@ def _coarse(dt: np.ndarray, poly: np.ndarray, scales_px_per_m: np.ndarray,
 
 def fit_silhouette(frame: np.ndarray, car, *, scale_hint: float | None = None,
                    direction: int | None = None, outline_tolerance_m: float = 0.01,
-                   frame_index: int = 0) -> SilhouetteFit:
+                   frame_index: int = 0, inside_px: np.ndarray | None = None) -> SilhouetteFit:
     """Fit the vehicle's side outline to a frame: scale, position, direction of travel.
 
     Parameters
@@ -198,6 +207,11 @@ def fit_silhouette(frame: np.ndarray, car, *, scale_hint: float | None = None,
         silhouette scale's uncertainty (``outline_tolerance_m / length``).
     frame_index : int
         For messages.
+    inside_px : (M, 2) float, optional
+        Image points on the car's side in this frame (its body targets), px: the outline
+        is looked for only where its bounding box holds them, and a fitted outline that
+        leaves one of them more than 2 px outside is refused (a grid or a lamp on the wall
+        can match the outline's shape better than the car's own edges do).
 
     Returns
     -------
@@ -223,7 +237,10 @@ def fit_silhouette(frame: np.ndarray, car, *, scale_hint: float | None = None,
     else:
         scales = np.exp(np.arange(np.log(0.2 * w / length), np.log(0.95 * w / length), 0.03))
     dirs = (direction,) if direction in (1, -1) else (1, -1)
-    k0, d, origin0, _ = _coarse(dt, poly, scales, dirs)
+    inside = None if inside_px is None else np.asarray(inside_px, float).reshape(-1, 2)
+    if inside is not None:
+        inside = inside[np.all(np.isfinite(inside), axis=1)]
+    k0, d, origin0, _ = _coarse(dt, poly, scales, dirs, inside if inside is not None and len(inside) else None)
     # refine on points ~1.5 px apart, in px-sized unknowns: du, dv, dlength, droll
     pts_m = _densify(poly, 1.5 / k0)
     half_len_px = 0.5 * length * k0
@@ -258,6 +275,12 @@ def fit_silhouette(frame: np.ndarray, car, *, scale_hint: float | None = None,
     m_per_px = 1.0 / k
     sigma = m_per_px * float(np.hypot(sig_len_rel, outline_tolerance_m / length))
     polygon = _to_image(poly, o, k, d, roll)
+    if inside is not None and len(inside):
+        contour = polygon.astype(np.float32).reshape(-1, 1, 2)
+        out = [p for p in inside if cv2.pointPolygonTest(contour, (float(p[0]), float(p[1])), True) < -2.0]
+        if out:
+            raise VideoError(f"the vehicle outline found in frame {frame_index} leaves {len(out)} of the "
+                             f"{len(inside)} body targets outside it: it matched other edges")
     ws = _to_image(np.asarray(car.windscreen_top, float)[None, :], o, k, d, roll)[0]
     front = polygon[np.argmax(poly[:, 0])]
     return SilhouetteFit(m_per_px=float(m_per_px), sigma=float(sigma), origin_px=o,

@@ -621,7 +621,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     kf, kr = roles.index("front_hub"), roles.index("rear_hub")
     sil = None
     try:
-        sil = fit_silhouette(film[ref], car, scale_hint=s, direction=d, frame_index=ref)
+        sil = fit_silhouette(film[ref], car, scale_hint=s, direction=d, frame_index=ref, inside_px=tt.uv[ref, body])
         cmp = compare_scales(s, s_sig, sil)
         notes.append(cmp.note)
     except VideoError as err:
