@@ -32,6 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
+from identify.fitting import NOT_IDENTIFIED  # noqa: E402
 from identify.model_error import TABLE_FILE, calibrate  # noqa: E402
 
 FORMAT_KIND = {"film": "film", "isomme": "sensors"}  # accuracy.py's --format -> model_error.KINDS
@@ -42,15 +43,30 @@ SCALE_OF = {"k_compression": "relative", "k_restitution": "relative", "restituti
          "engine_impact.engine_mass": "relative", "engine_impact.gap": "absolute"}
 
 
+def identified_by_the_data(name: str, p: dict) -> bool:
+    """Whether the fit would have called a collision parameter identified on its data alone:
+    reported identified, or not identified with a data std within ``NOT_IDENTIFIED``'s limit
+    (only the model term put it beyond: a table calibrated with one in place must not drop
+    the parameters that table itself hides)."""
+    if p.get("identified", True):
+        return True
+    kind, limit = NOT_IDENTIFIED.get(name, (None, None))
+    std = p.get("std_data")
+    if kind is None or not std:
+        return False
+    return bool(std <= limit * (abs(p["value"]) if kind == "relative" else 1.0))
+
+
 def errors_of(row: dict) -> dict[str, tuple[float, float]]:
     """name -> (error, data std) of one world's row of ``accuracy.py --json``, in ``SCALE_OF``'
     terms (fractions of the truth, or the parameter's unit). Absent: parameters held fixed,
-    and those the fit reported not identified (the model term covers what the tool claims).
-    A row from before the model's error was added has only ``std``: the data's."""
+    and those the data alone leave not identified (``identified_by_the_data``: the model term
+    covers what the tool would claim). A row from before the model's error was added has only
+    ``std``: the data's."""
     out = {}
     for name, p in row.get("params", {}).items():
         std = p.get("std_data", p.get("std"))
-        if name not in SCALE_OF or not std or not p.get("identified", True):
+        if name not in SCALE_OF or not std or not identified_by_the_data(name, p):
             continue
         if SCALE_OF[name] == "relative":
             true = p["value"] / (1.0 + p["err"] / 100.0)

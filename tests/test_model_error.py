@@ -106,7 +106,7 @@ def test_calibration_rows_convert_to_fractions_of_the_truth_and_absolute_units()
 def test_calibration_counts_identified_values_of_clean_fitted_calibration_worlds_only():
     base = CALIBRATION_SEED_BASE
     rows = [_row(base, k_compression=(1.05e6, 5.0, 1e-9)), _row(base + 1, k_compression=(0.95e6, -5.0, 1e-9)),
-            _row(base + 4, not_identified=("k_compression",), k_compression=(3e6, 200.0, 1e5)),  # claims nothing
+            _row(base + 4, not_identified=("k_compression",), k_compression=(3e6, 200.0, 1e6)),  # data: 33 %
             _row(base + 2, effect="stiffness_zone", k_compression=(2e6, 100.0, 1e-9)),
             _row(base + 3, status="refused")]
     doc = model_error_table(rows)
@@ -114,6 +114,17 @@ def test_calibration_counts_identified_values_of_clean_fitted_calibration_worlds
     assert doc["measured"]["k_compression"]["worlds"] == 2 and doc["seeds"] == [base, base + 1, base + 4]
     with pytest.raises(SystemExit, match="not calibration seeds"):
         model_error_table(rows + [_row(SEED_BASE, k_compression=(1e6, 0.0, 1.0))])
+
+
+def test_a_value_the_data_identify_counts_though_the_model_term_hid_it():
+    """A table calibrated with one in place: a k_restitution reported not identified only
+    because the table's model term put it beyond 20 % (its data's std 10 % of the value) still counts;
+    one whose data's std is 30 % does not (fitting.NOT_IDENTIFIED's 20 %)."""
+    base = CALIBRATION_SEED_BASE
+    hid = errors_of(_row(base, not_identified=("k_restitution",), k_restitution=(1.2e6, 20.0, 1.2e5)))
+    assert hid["k_restitution"] == pytest.approx((0.2, 0.12))  # 10 % of the value, 12 % of the truth
+    unseen = errors_of(_row(base, not_identified=("k_restitution",), k_restitution=(1.2e6, 20.0, 3.6e5)))
+    assert "k_restitution" not in unseen
 
 
 def test_calibrating_one_kind_of_recording_keeps_the_other_kinds_table():

@@ -179,8 +179,10 @@ def _coarse(dt: np.ndarray, poly: np.ndarray, scales_px_per_m: np.ndarray,
                 origin = (np.array(loc, float) - lo + 1) * ds
                 best = (mn, (k, d, origin))
     if best[1] is None:
-        raise VideoError("the vehicle outline does not fit in the frame at any scale tried; "
-                         "check the vehicle file and the scale")
+        held = "" if inside_px is None else (" around the body targets (they spread wider than the car's outline"
+                                             " at every scale tried: are they all on the car?)")
+        raise VideoError("the vehicle outline does not fit in the frame at any scale tried" + held
+                         + "; check the vehicle file and the scale")
     k, d, origin = best[1]
     return k, d, origin, best[0] * ds
 

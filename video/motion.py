@@ -101,9 +101,9 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0
     angle : (n, K) float
         Unwrapped pattern orientation per frame, rad (NaN where lost).
     fixed_px : float
-        A target whose centre never moves further than this from its median is fixed, px:
-        wide enough for a camera shaken by the impact (a few px), far below the car's
-        travel (its approach and crush: tens of px at least).
+        A target seen in at least half the frames whose centre never moves further than
+        this from its median is fixed, px: wide enough for a camera shaken by the impact (a
+        few px), far below the car's travel (its approach and crush: tens of px at least).
     spin_rad : float
         A moving target whose pattern turns through more than this (beyond what the
         body turns) is on a wheel hub, rad.
@@ -124,7 +124,9 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0
     n, K, _ = uv.shape
     med = np.nanmedian(uv, axis=0)
     spread = np.nanmax(np.hypot(*(uv - med).transpose(2, 0, 1)), axis=0)
-    moving = spread > fixed_px
+    seen = np.mean(np.isfinite(uv[:, :, 0]), axis=0)
+    # a target seen only briefly (a car target lost early) can move little while it is seen
+    moving = (spread > fixed_px) | (seen < 0.5)
     if not moving.any():
         raise VideoError("no target moves during the film: the car is not tracked; "
                          "check that the film shows the approach and the crash")
@@ -254,6 +256,8 @@ class Stabilised:
 
 #: Fixed targets moving together by less than this are taken to stand still: no correction, px.
 SHAKE_MIN_PX = 0.3
+#: ... or by less than this many of their own standard deviations (shift, and roll apart).
+SIGNIFICANT = 6.0
 
 
 def stabilise_on_fixed(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray) -> Stabilised | None:
@@ -264,9 +268,13 @@ def stabilise_on_fixed(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray) 
     (barrier, floor) motion in each frame is the camera's. Their reference positions are
     their medians over the film; in each frame the rigid motion (rotation and translation,
     :func:`rigid_fit`; translation alone with one fixed target) taking the reference onto
-    the seen fixed targets is inverted and applied to every target. The fixed targets'
-    detection noise enters every corrected centre: their sigma over the square root of their
-    number is added in quadrature.
+    the seen fixed targets is inverted and applied to every target. Only a shake counts:
+    the fixed targets must move together by more than :data:`SHAKE_MIN_PX` and
+    :data:`SIGNIFICANT` times their shift's noise in some frame, and the roll is taken out
+    only when it too stands that far out of its noise (fixed targets close together measure
+    it poorly). The correction's noise enters every corrected centre in quadrature: the
+    shift's (the fixed targets' sigma over the square root of their number) and, with the
+    roll, the roll's times the distance from the fixed targets' centroid.
 
     Parameters
     ----------
@@ -280,35 +288,50 @@ def stabilise_on_fixed(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray) 
     Returns
     -------
     Stabilised or None
-        None when there is no fixed target, or when the fixed targets never move together by
-        more than :data:`SHAKE_MIN_PX` (a still camera: correcting it would only add their
-        noise). Frames without a fixed target in view are left as they are (shift NaN).
+        None when there is no fixed target, or no shake (a still camera: correcting it would
+        only add the fixed targets' noise). Frames without a fixed target in view are left as
+        they are (shift NaN).
     """
     uv = np.asarray(uv, dtype=float)
+    sigma_px = np.asarray(sigma_px, dtype=float)
     fixed = np.asarray(fixed, dtype=int)
     if len(fixed) == 0:
         return None
     n = uv.shape[0]
     ref = np.nanmedian(uv[:, fixed], axis=0)
-    out, sig = uv.copy(), np.asarray(sigma_px, dtype=float).copy()
     shift = np.full((n, 2), np.nan)
-    roll = np.zeros(n)
+    roll = np.full(n, np.nan)
+    shift_sig = np.full(n, np.nan)  # one-sigma of the shift per axis, px
+    roll_sig = np.full(n, np.nan)  # of the roll, rad
+    centre = np.full((n, 2), np.nan)
     for i in range(n):
         seen = np.all(np.isfinite(uv[i, fixed]), axis=1) & np.all(np.isfinite(ref), axis=1)
         if not seen.any():
             continue
         r, c = ref[seen], uv[i, fixed[seen]]
+        s_rms = float(np.sqrt(np.nanmean(sigma_px[i, fixed[seen]] ** 2)))
         if seen.sum() >= 2:
             phi, rc, cc, _ = rigid_fit(r, c)
+            roll[i], roll_sig[i] = phi, s_rms / np.sqrt(np.sum((r - rc) ** 2))
         else:
-            phi, rc, cc = 0.0, r[0], c[0]
-        shift[i], roll[i] = cc - rc, phi
-        out[i] = rc + (uv[i] - cc) @ _rot(phi)  # R(phi)^-1 applied to each row
-        noise = float(np.sqrt(np.mean(sigma_px[i, fixed[seen]] ** 2)) / np.sqrt(seen.sum()))
-        sig[i] = np.hypot(sig[i], noise)
-    lever = np.nanmax(np.abs(roll)) * float(np.max(np.ptp(ref, axis=0)) if len(fixed) > 1 else 0.0)
-    if not np.nanmax(np.hypot(*shift.T), initial=0.0) + lever > SHAKE_MIN_PX:
+            rc, cc = r[0], c[0]
+        shift[i], shift_sig[i], centre[i] = (cc - rc), s_rms / np.sqrt(seen.sum()), cc
+    if not np.isfinite(shift_sig).any():
         return None
+    size = np.hypot(*shift.T)
+    # a shake: the fixed targets move together by more than SHAKE_MIN_PX and far beyond their noise
+    if not (np.nanmax(size) > SHAKE_MIN_PX and np.nanmax(size / shift_sig) > SIGNIFICANT):
+        return None
+    # the roll only when it stands out of its own noise somewhere (close fixed targets
+    # measure it poorly, and its error grows with the distance to every other target)
+    use_roll = bool(np.max(np.nan_to_num(np.abs(roll) / roll_sig), initial=0.0) > SIGNIFICANT)
+    roll = np.where(np.isfinite(roll) & use_roll, roll, 0.0)
+    out, sig = uv.copy(), sigma_px.copy()
+    for i in np.flatnonzero(np.isfinite(shift[:, 0])):
+        rc = centre[i] - shift[i]
+        out[i] = rc + (uv[i] - centre[i]) @ _rot(roll[i])  # R(roll)^-1 applied to each row
+        lever = np.hypot(*(uv[i] - centre[i]).T) if use_roll else 0.0
+        sig[i] = np.sqrt(sig[i] ** 2 + shift_sig[i] ** 2 + (np.nan_to_num(roll_sig[i]) * lever) ** 2)
     return Stabilised(uv=out, sigma_px=sig, shift_px=shift, roll=roll)
 
 

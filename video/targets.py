@@ -61,8 +61,8 @@ class TargetConfig:
     Attributes
     ----------
     min_radius_px, max_radius_px : float
-        Range of target radii to look for, px (50-150 mm targets at 2-10 mm/px: 3-38 px;
-        a 73 mm target at 9 mm/px has a radius of 4.0 px).
+        Range of target radii to look for, px (a 60 mm target at 10 mm/px has a radius of
+        3 px, a 150 mm target at 2 mm/px one of 38 px; a 73 mm target at 9 mm/px, 4.0 px).
     sigmas_px : tuple of float
         Gaussian scales of the saddle response, px; the response is the maximum over them.
     min_contrast : float

@@ -569,7 +569,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     if len(first) < 2:
         raise VideoError(f"{len(first)} quadrant target(s) found in frame 0 of {where}; at "
                          "least two on the passenger cell are needed (check the targets are "
-                         "in view and 6-80 px across)")
+                         f"in view and {2 * config.detect.min_radius_px:g}-{2 * config.detect.max_radius_px:g} px across)")
 
     # --- follow them
     noise = getattr(film, "noise", None)
