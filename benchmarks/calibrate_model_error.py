@@ -32,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
-from identify.fitting import NOT_IDENTIFIED  # noqa: E402
+from identify.fitting import NOT_IDENTIFIED, spread_of  # noqa: E402
 from identify.model_error import TABLE_FILE, calibrate  # noqa: E402
 
 FORMAT_KIND = {"film": "film", "isomme": "sensors"}  # accuracy.py's --format -> model_error.KINDS
@@ -50,11 +50,8 @@ def identified_by_the_data(name: str, p: dict) -> bool:
     the parameters that table itself hides)."""
     if p.get("identified", True):
         return True
-    kind, limit = NOT_IDENTIFIED.get(name, (None, None))
     std = p.get("std_data")
-    if kind is None or not std:
-        return False
-    return bool(std <= limit * (abs(p["value"]) if kind == "relative" else 1.0))
+    return bool(name in NOT_IDENTIFIED and std and spread_of(name, p["value"], std) <= NOT_IDENTIFIED[name][1])
 
 
 def errors_of(row: dict) -> dict[str, tuple[float, float]]:

@@ -487,6 +487,13 @@ def model_error_reason(value: float, std_data: float, std_model: float, kind: st
             " model did not make, its simplifications moved this parameter that far")
 
 
+def spread_of(name: str, value: float, sd: float) -> float:
+    """A collision parameter's standard deviation ``sd`` in the terms of its
+    ``NOT_IDENTIFIED`` limit: relative to ``value``, or in its own unit."""
+    kind, _ = NOT_IDENTIFIED[name]
+    return sd / abs(value) if kind == "relative" and value != 0 else sd
+
+
 def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool, str]]:
     """Say, for each collision parameter, whether the data constrain it, and if not why.
 
@@ -506,7 +513,7 @@ def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool,
         if name not in result.values:
             continue
         value, sd = result.values[name], result.std[name]
-        spread = sd / abs(value) if kind == "relative" and value != 0 else sd
+        spread = spread_of(name, value, sd)
         if spread <= limit:
             out[name] = (True, "")
             continue

@@ -212,15 +212,23 @@ def rigid_body_force(test, t_contact: float | None = None, cfc: int = 60) -> tup
     force : (n,) float64
         N, positive when the car decelerates.
     """
-    from identify.recordings.motion import combine, contact_time, filter_cfc
+    from identify.recordings.motion import contact_time
 
-    if not test.mass_kg:
-        raise UserError(f"{test.source}: the header gives no test mass; the rigid-body force needs it")
-    t, a = combine(test.vehicle, "mean", "vehicle accelerations", test.source)
+    t, a = _cabin_acceleration(test, cfc, "the rigid-body force")
     if t_contact is None:
         t_contact, _ = contact_time(test)
-    force = -float(test.mass_kg) * filter_cfc(a, 1.0 / np.median(np.diff(t)), cfc)
-    return t - t_contact, force
+    return t - t_contact, -float(test.mass_kg) * a
+
+
+def _cabin_acceleration(test, cfc: int, needed_by: str) -> tuple[np.ndarray, np.ndarray]:
+    """(t (s, the recording's clock), the vehicle accelerometers' mean (m/s^2), offset-free,
+    filtered with ``cfc``) of a test that has a mass (``needed_by`` names what needs it)."""
+    from identify.recordings.motion import combine, filter_cfc
+
+    if not test.mass_kg:
+        raise UserError(f"{test.source}: the header gives no test mass; {needed_by} needs it")
+    t, a = combine(test.vehicle, "mean", "vehicle accelerations", test.source)
+    return t, filter_cfc(a, 1.0 / np.median(np.diff(t)), cfc)
 
 
 def _two_body_parts(test, t_contact: float, cfc: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -229,14 +237,11 @@ def _two_body_parts(test, t_contact: float, cfc: int) -> tuple[np.ndarray, np.nd
     force for an engine of mass m_e is the second plus m_e times the third."""
     from identify.recordings.motion import combine, filter_cfc
 
-    if not test.mass_kg:
-        raise UserError(f"{test.source}: the header gives no test mass; the two-body force needs it")
+    t, a = _cabin_acceleration(test, cfc, "the two-body force")
     if not test.engine:
         raise UserError(f"{test.source}: the test has no engine accelerometer; the two-body force needs one")
-    t, a = combine(test.vehicle, "mean", "vehicle accelerations", test.source)
     te, ae = combine(test.engine, "mean", "engine accelerations", test.source)
-    fs = 1.0 / np.median(np.diff(t))
-    cabin = np.interp(te, t, filter_cfc(a, fs, cfc))
+    cabin = np.interp(te, t, a)
     engine = filter_cfc(ae, 1.0 / np.median(np.diff(te)), cfc)
     return te - t_contact, -float(test.mass_kg) * cabin, cabin - engine
 
