@@ -4,7 +4,8 @@
 Renders the films of the scored worlds (``benchmarks/accuracy.py``'s seeds from 910,000 and
 its schedule of effects; tests use seeds below 1000), runs ``video.track.track_film`` on each
 twice in the same process, as shipped and with one stage switched off as the baseline
-(``--baseline stabilise``: no camera-shake correction), and scores both against the world's
+(``--baseline stabilise``: no camera-shake correction; ``--baseline see_contact``: contact
+from the deceleration onset alone), and scores both against the world's
 truth with ``synth.scoring.tracking_errors``: body x RMS (mm, and in pixels of the film),
 the share of frames from -15 to 250 ms with an x, the contact frame's error (ms) and the
 impact speed's error (%). Prints a row per film and the shares issue 14 asks for: x RMS
@@ -29,7 +30,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from accuracy import SEED_BASE, world_plan  # noqa: E402
 
-BASELINES = {"stabilise": {"stabilise": False}}  # TrackerConfig fields switched off in the baseline
+BASELINES = {"stabilise": {"stabilise": False}, "see_contact": {"see_contact": False}}  # TrackerConfig fields switched off in the baseline
 
 
 def track_world(seed: int, effect: str, baseline: str) -> dict:

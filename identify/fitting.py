@@ -339,12 +339,13 @@ def fit(
     priors = dict(priors or {})
     # the recording's own measurements of the nuisances are priors like any other, so their
     # pulls are reported (FitResult.pulls): the measured impact speed (header, approach
-    # frames) and first contact when measured apart from the fitted channels (load cells)
+    # frames) and first contact when measured apart from the fitted channels (load cells,
+    # the front end seen stopping in a film)
     names = {p.name for p in free} - set(held)
     if speed_mps is None and measurement.impact_speed_sigma and "impact_speed" in names:
         priors.setdefault("impact_speed", (float(speed_guess), float(measurement.impact_speed_sigma)))
     if measurement.contact_time_sigma and "contact_time" in names:
-        priors.setdefault("contact_time", (0.0, float(measurement.contact_time_sigma)))
+        priors.setdefault("contact_time", (float(measurement.contact_time_s), float(measurement.contact_time_sigma)))
     data = dict(
         t=jnp.asarray(measurement.t),
         y=jnp.asarray(y),

@@ -59,7 +59,11 @@ class Measurement:
     impact_speed_sigma : its one-sigma uncertainty (m/s), or None.
     contact_time_sigma : s, one-sigma uncertainty of t = 0 as the instant of first contact
         when the recording measures it apart from the fitted channels (a barrier's load
-        cells), or None (t = 0 found from the fitted motion itself).
+        cells, the front end seen stopping at the barrier in a film), or None (t = 0 found
+        from the fitted motion itself).
+    contact_time_s : s, that measured instant on the clock of ``t`` (t = 0 is the sample at
+        or just after it, so it lies within one sample interval before 0); used with
+        ``contact_time_sigma``.
     source : what the recording was (a file name), for reports.
     events_ms : events seen in the recording (e.g. ``front_wheel_block``), ms after contact.
     notes : things a person should read about the recording.
@@ -74,6 +78,7 @@ class Measurement:
     impact_speed_mps: float | None = None
     impact_speed_sigma: float | None = None
     contact_time_sigma: float | None = None
+    contact_time_s: float = 0.0
     source: str = ""
     events_ms: dict[str, float] = dataclasses.field(default_factory=dict)
     notes: tuple[str, ...] = ()

@@ -27,6 +27,7 @@ from typing import Callable, Iterable, Iterator
 import cv2
 import numpy as np
 
+from video.contact_seen import NOSE_BAND_M, SeenContact, not_seen, see_contact, settle_contact
 from video.errors import VideoError
 from video.filters import velocity
 from video.targets import (
@@ -89,6 +90,10 @@ class TrackerConfig:
     stabilise : bool
         Take a camera shaken by the impact out of the tracks with the fixed targets
         (``video.motion.stabilise_on_fixed``); off only to measure what it does.
+    see_contact : bool
+        Look for first contact in the picture, the front end stopping at the barrier
+        (``video.contact_seen``); off only to measure what it does (the deceleration
+        onset alone).
     """
 
     search_px: float = 8.0
@@ -100,6 +105,7 @@ class TrackerConfig:
     radius_tolerance: float = 0.25
     detect: TargetConfig = field(default_factory=TargetConfig)
     stabilise: bool = True
+    see_contact: bool = True
 
 
 @dataclass(frozen=True)
@@ -496,6 +502,29 @@ def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car) -> dict:
     return out
 
 
+def _contact_in_picture(film, frame_t, pose, cg_uv, car: CarGeometry, s: float, d: int, onset_s: float,
+                        lens, stab) -> SeenContact:
+    """First contact in the picture (:mod:`video.contact_seen`), the nose placed from the CG
+    and the vehicle's outline (the picture's own front may stand a few px off it)."""
+    from video.calibrate import undistort_points
+
+    def to_pose(i: int, p: np.ndarray) -> np.ndarray:
+        p = undistort_points(np.asarray(p, float), lens) if lens.corrected else np.asarray(p, float)
+        if stab is not None and np.isfinite(stab.shift_px[i, 0]):
+            p = p - stab.shift_px[i]
+        return p
+
+    sil = np.asarray(car.silhouette_side, float)
+    front = sil[sil[:, 0] >= sil[:, 0].max() - NOSE_BAND_M]
+    z_lo, z_hi = float(front[:, 1].min()), float(front[:, 1].max())
+    cg_v = float(cg_uv[1])
+    rows = (cg_v - (z_hi - car.cg_height) / s - 1.0, cg_v - (z_lo - car.cg_height) / s + 1.0)
+    if rows[1] - rows[0] < 5:
+        return not_seen("the vehicle outline's front is under 5 rows high at this scale")
+    nose = np.array([cg_uv[0] + d * (sil[:, 0].max() - car.x_cg) / s, 0.5 * sum(rows)])
+    return see_contact(film.__getitem__, frame_t, pose, nose, rows, d, onset_s, to_pose=to_pose)
+
+
 def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
                speed_mps: float | None = None, progress: Progress | None = None,
                config: TrackerConfig = TrackerConfig()) -> Tracks:
@@ -677,11 +706,18 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     except VideoError:
         x_fit = XZ[:, 0]
         tc, how = contact_time(frame_t, x_fit, pos_sig, fps)
+    notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
+    seen = _contact_in_picture(film, frame_t, pose, cg_uv, car, s, d, tc, lens, stab) \
+        if cg_src and config.see_contact else None
+    tc_sigma = None
+    if seen is not None:
+        tc, tc_sigma, note = settle_contact(tc, seen)
+        notes.append(note)
     # first frame at or after the contact; a contact within 0.2 frame after a frame is
     # taken as that frame (the onset fit's precision: frame-aligned contacts stay put)
     cf = int(np.ceil(tc * fps - 0.2))
     cf = min(max(cf, 1), n - 1)
-    notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0, contact frame {cf}")
+    notes.append(f"contact frame {cf}")
     v_meas, v_sig = impact_speed(frame_t, x_fit, pos_sig, cf)
     v_sig = float(np.hypot(v_sig, v_meas * s_sig / s))
     if speed_mps is not None:
@@ -757,4 +793,5 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     return Tracks(t=t, channels=channels, sigma=sigma, events_ms=events, contact_frame=cf,
                   fps=fps, scale_m_per_px=float(s), scale_sigma=float(s_sig),
                   impact_speed_mps=float(v_imp), direction=int(d), notes=notes,
-                  contact_offset_s=float(tc - cf / fps), overlay=overlay, geometry=geometry)
+                  contact_offset_s=float(tc - cf / fps), contact_sigma_s=tc_sigma, overlay=overlay,
+                  geometry=geometry)

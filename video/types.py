@@ -84,6 +84,10 @@ class Tracks:
         Estimated instant of first contact relative to ``t = 0`` (the contact frame), s,
         in about (-1/fps, 0]: the sub-frame contact time, for comparing with a model
         whose clock starts at the contact instant.
+    contact_sigma_s : float or None
+        One-sigma of the contact instant when the picture shows it (the front end seen
+        stopping at the barrier face, :mod:`video.contact_seen`), s; None when it comes
+        from the deceleration onset of the measured motion itself.
     overlay : dict
         What the tracking report draws on the reference frame, px: ``frame`` (index),
         ``tapes`` (list of (2, 2) end points), ``targets_uv`` (K, 2), ``target_kinds``
@@ -108,5 +112,6 @@ class Tracks:
     direction: int
     notes: list = field(default_factory=list)
     contact_offset_s: float = 0.0
+    contact_sigma_s: float | None = None
     overlay: dict = field(default_factory=dict)
     geometry: dict = field(default_factory=dict)

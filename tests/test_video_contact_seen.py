@@ -1,0 +1,147 @@
+"""First contact seen in the picture (``video.contact_seen``): the front end's stop in a
+series whose stop is known, the front column against a textured background with debris
+ahead of it, and the whole search on drawn frames of a car that stops at a known instant."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from video.contact_seen import (
+    MIN_CHI2_GAIN,
+    ONSET_SIGMA_S,
+    SeenContact,
+    front_column,
+    not_seen,
+    see_contact,
+    settle_contact,
+    stop_time,
+)
+from video.motion import BodyPose
+
+FPS = 1000.0
+
+
+def _series(ts=0.0124, v=-2.3, c=3.0, noise=0.3, n=36, t0=0.0, seed=1):
+    """A front end moving at ``v`` px/frame that stops at ``ts`` s, seen ``c`` px off the
+    rigid one, with Gaussian noise of ``noise`` px."""
+    rng = np.random.default_rng(seed)
+    t = t0 + np.arange(n) / FPS
+    rigid = 500.0 + v * FPS * (t - t0)
+    seen = np.where(t < ts, rigid, np.interp(ts, t, rigid)) + c + rng.normal(0, noise, n)
+    return t, rigid, seen, np.full(n, noise)
+
+
+def test_the_stop_is_found_between_frames_with_an_honest_sigma():
+    errs, sigs = [], []
+    for seed in range(40):
+        ts_true = 0.0124 + 0.00037 * (seed % 7)
+        t, rigid, seen, sig = _series(ts=ts_true, seed=seed)
+        ts, ts_sig, stop_u, gain = stop_time(t, rigid, seen, sig, 0.02 / FPS)
+        errs.append(ts - ts_true)
+        sigs.append(ts_sig)
+        assert gain > MIN_CHI2_GAIN
+        assert stop_u == pytest.approx(np.interp(ts_true, t, rigid) + 3.0, abs=0.5)
+    errs, sigs = np.array(errs), np.array(sigs)
+    assert np.sqrt(np.mean(errs**2)) < 0.15e-3
+    # the profile's sigma neither hides nor swamps the error
+    assert 0.5 < np.mean(np.abs(errs) <= sigs) <= 0.95
+    assert np.mean(np.abs(errs) <= 2 * sigs) >= 0.9
+
+
+def test_a_front_end_that_never_stops_gains_nothing():
+    t, rigid, _, sig = _series()
+    seen = rigid + 2.0 + np.random.default_rng(3).normal(0, 0.3, len(t))
+    assert stop_time(t, rigid, seen, sig, 0.02 / FPS)[3] < MIN_CHI2_GAIN
+
+
+def test_debris_ahead_of_the_stopped_front_end_does_not_move_the_stop():
+    t, rigid, seen, sig = _series(ts=0.0124)
+    seen[16:18] -= 9.0  # two frames where something ahead was taken for the front end
+    ts = stop_time(t, rigid, seen, sig, 0.02 / FPS)[0]
+    assert ts == pytest.approx(0.0124, abs=0.25e-3)
+
+
+def test_too_few_frames_after_the_stop_say_nothing():
+    t, rigid, seen, sig = _series(ts=0.0335, n=36)
+    found = stop_time(t[:12], rigid[:12], seen[:12], sig[:12], 0.02 / FPS)
+    assert found is None or found[3] < MIN_CHI2_GAIN
+
+
+def _background(h=60, w=200, seed=0):
+    rng = np.random.default_rng(seed)
+    tex = rng.uniform(60, 160, (h // 4 + 1, w // 4 + 1))
+    return np.kron(tex, np.ones((4, 4)))[:h, :w]
+
+
+def _with_car(bg, front, grey=110.0, direction=1, debris=None):
+    """``bg`` with a car of uniform ``grey`` behind the sub-pixel column ``front``."""
+    img = bg.copy()
+    u = np.arange(bg.shape[1])
+    cover = np.clip(direction * (front - u) + 0.5, 0.0, 1.0)  # pixel coverage
+    img = cover * grey + (1 - cover) * img
+    if debris is not None:
+        u0, rows = debris
+        img[rows, u0:u0 + 3] = 250.0
+    return img
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_the_front_column_against_a_textured_background(direction):
+    bg = _background()
+    front = 101.3 if direction == 1 else 98.7
+    # debris 10 px ahead of the front end, past the 6 px of background that end the car
+    img = _with_car(bg, front, direction=direction, debris=(int(front) + 10 * direction, slice(10, 30)))
+    rows = np.arange(5.0, 55.0)
+    u_from = front - direction * 30
+    u, sig, used = front_column(img, bg, rows, u_from, front + direction * 15, threshold=10.0)
+    assert used >= 10  # rows that start on a patch of background as grey as the car are skipped
+    # the car's colour is the texture's mean: only the difference from the background shows it
+    # (a fixed threshold against a background of varying grey: up to half a pixel)
+    assert u == pytest.approx(front, abs=0.5)
+    assert sig >= 0.1
+
+
+def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1):
+    """Frames of a car (uniform grey) whose front moves at ``v`` px/frame and stops at the
+    fractional frame ``stop_frame``, over a textured background, with a body pose that
+    keeps moving (the passenger cell goes on after contact)."""
+    bg = _background(h=80, w=300, seed=4)
+    nose0 = 230.0
+    frames, point = [], np.zeros((n, 2))
+    for i in range(n):
+        rigid = nose0 + v * i
+        front = rigid if i < stop_frame else nose0 + v * stop_frame
+        frames.append(np.clip(_with_car(bg, front, grey=115.0, direction=direction), 0, 255).astype(np.uint8))
+        point[i] = (rigid + 100.0, 40.0)
+    pose = BodyPose(point=point, point_sigma=np.full(n, 0.05), phi=np.zeros(n), phi_sigma=np.full(n, 1e-4),
+                    rms_px=np.zeros(n), n_targets=np.full(n, 3), ref_frame=0)
+    return frames, pose, np.array([nose0, 40.0])
+
+
+def test_a_car_seen_stopping_gives_the_contact_between_frames():
+    frames, pose, nose = _drawn_film()
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+    assert 0.0 < seen.sigma_s <= 2e-3
+    assert "first contact seen" in seen.note
+
+
+def test_a_car_as_grey_as_the_background_is_not_seen():
+    frames, pose, nose = _drawn_film()
+    flat = [np.full_like(f, 110) for f in frames]
+    seen = see_contact(flat.__getitem__, np.arange(len(flat)) / FPS, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "not_seen" and "differs from the background" in seen.note
+
+
+def test_settling_the_contact_prefers_the_picture_and_says_a_disagreement():
+    seen = SeenContact("seen", 0.0200, 0.0005, 100.0, 0.2, "first contact seen at 20.00 +- 0.50 ms")
+    tc, sig, note = settle_contact(0.0210, seen)
+    assert (tc, sig) == (0.0200, 0.0005) and "disagree" not in note
+    late = 0.0200 + 3.2 * np.hypot(0.0005, ONSET_SIGMA_S)
+    tc, sig, note = settle_contact(late, seen)
+    assert tc == 0.0200 and "disagree" in note
+    tc, sig, note = settle_contact(0.0210, not_seen("too dark"))
+    assert (tc, sig) == (0.0210, None) and "onset alone" in note

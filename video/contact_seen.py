@@ -1,0 +1,351 @@
+"""First contact seen in the picture: the car's front end stopping at the barrier.
+
+Before contact the front end (the bumper's leading edge in the outline) moves with the
+passenger cell. From first contact on, the bumper stands against the barrier face while the
+cell goes on: the visible front end stops in the image, sharply (at 15 m/s it moves 2-3 px a
+frame at 1000 fps, then not at all), long before the cell's deceleration rises out of the
+noise (a force growing with the crush moves the cell by less than 1 mm in the first 5-8 ms).
+The contact is the instant at which the front end carried rigidly with the cell reaches the
+column where the visible front end stands after the stop (:func:`stop_time`).
+
+Both are measured in the car's own plane, whatever the barrier's depth. The barrier's edge
+in the picture is not the face: a barrier side face 0.6 m nearer the camera than the car's
+side shows its edge about 0.14 m beyond the face (the nose touches the face short of the
+edge and stops there, in view); a barrier farther away shows it short of the face (the nose
+passes in front of it and stops beyond). The front end is found against the background as
+it was in frame 0, before the car got there (:func:`front_column`), so wall texture and the
+barrier's own edges do not count.
+
+Positions are image px (undistorted, with the camera shake taken out, as the body pose);
+times s on the film's clock (0 at frame 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .errors import VideoError
+from .motion import BodyPose
+
+#: The nose's rows: the vehicle outline within this distance of its front-most point, m.
+NOSE_BAND_M = 0.08
+#: Samples (0.5 px; 6 px) of background that end the car's run of columns in a row.
+GAP_SAMPLES = 12
+#: Floor of a front column's one-sigma, px (compression blocks, the rows' quantile).
+FRONT_FLOOR_PX = 0.3
+#: Which of the rows' front columns stands for the front end (quantile in the travel direction).
+FORWARD_QUANTILE = 0.9
+#: The front end is followed from this long before the deceleration onset's first guess, s.
+WINDOW_BEFORE_S = 0.020
+#: ... to this long after it, s.
+WINDOW_AFTER_S = 0.015
+#: Frames the visible front end must be followed on each side of the stop.
+MIN_FRAMES_EACH_SIDE = 4
+#: How much better (chi-square) a stop must explain the front end than no stop at all.
+MIN_CHI2_GAIN = 25.0
+#: The car's front must differ from the background by this many times the noise, and
+#: by at least CONTRAST_MIN grey levels, to be seen stopping.
+CONTRAST_NOISES = 4.0
+CONTRAST_MIN = 6.0
+#: Floor of a seen contact's one-sigma, in frame intervals: the picture's stop came
+#: 0.2-1.6 ms after the true contact on 9 of 10 reference-world films at 1000 fps (seeds
+#: 960003-960028, which no test and no benchmark scores), 3.4 ms on one at 500 fps.
+SEEN_FLOOR_FRAMES = 1.0
+
+
+@dataclass(frozen=True)
+class SeenContact:
+    """What the picture says of the instant of first contact.
+
+    Attributes
+    ----------
+    kind : str
+        ``"seen"`` (the front end stopped in view: ``time_s`` is the contact) or
+        ``"not_seen"``.
+    time_s, sigma_s : float
+        Film-clock time of the stop and its one-sigma, s (NaN when not seen).
+    stop_u_px, stop_sigma_px : float
+        Column where the visible front end stood after the stop and its one-sigma, px.
+    note : str
+        One sentence for the notes.
+    """
+
+    kind: str
+    time_s: float
+    sigma_s: float
+    stop_u_px: float
+    stop_sigma_px: float
+    note: str
+
+
+def not_seen(why: str) -> SeenContact:
+    """A :class:`SeenContact` of kind ``not_seen``, saying why."""
+    nan = float("nan")
+    return SeenContact("not_seen", nan, nan, nan, nan, f"first contact not seen in the picture: {why}")
+
+
+def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+              step_s: float) -> tuple[float, float, float, float] | None:
+    """When a front end carried rigidly stops being the visible one.
+
+    Model: the visible front end ``u_seen`` is the rigid one ``u_rigid`` (linearly
+    interpolated between frames) plus a constant ``c`` until ``ts``, and stands at
+    ``u_rigid(ts) + c`` from then on (``c``: where the vehicle file's outline puts the
+    front against where the picture shows it). ``ts`` is searched on a grid of ``step_s``
+    over the frames, ``c`` solved by weighted least squares at each.
+
+    Parameters
+    ----------
+    t : (n,) s
+        Frame times, increasing.
+    u_rigid, u_seen, sigma : (n,) px
+        The rigidly carried front end, the one seen, and the seen one's one-sigma.
+    step_s : float
+        Grid step, s.
+
+    Returns
+    -------
+    (ts, ts_sigma, u_stop, chi2_gain) or None
+        Stop time (s) and its one-sigma from the chi-square profile (a sixth of the
+        width where it rises by 9, scaled by the reduced chi-square when above 1), the stop column px, and how much the stop
+        lowers the chi-square against a front end that never stops. None when fewer than
+        :data:`MIN_FRAMES_EACH_SIDE` seen frames stand on either side of it.
+    """
+    ok = np.isfinite(u_rigid) & np.isfinite(u_seen) & np.isfinite(sigma) & (sigma > 0)
+    first = _stop_fit(t, u_rigid, u_seen, sigma, ok, step_s)
+    if first is None:
+        return None
+    # once more without the frames the stop explains worst (debris ahead of the front
+    # end, a row of the background that changed): beyond 4 robust sigmas and 1 px
+    res = first[4]
+    keep = np.abs(res - np.median(res[ok])) <= np.maximum(4.0 * 1.4826 * np.median(np.abs(res[ok] - np.median(res[ok]))), 1.0)
+    second = _stop_fit(t, u_rigid, u_seen, sigma, ok & keep, step_s) if (ok & ~keep).any() else first
+    return (second or first)[:4]
+
+
+def _stop_fit(t, u_rigid, u_seen, sigma, ok, step_s):
+    if ok.sum() < 2 * MIN_FRAMES_EACH_SIDE + 1:
+        return None
+    tt, ur, us, w = t[ok], u_rigid[ok], u_seen[ok], 1.0 / sigma[ok] ** 2
+    grid = np.arange(tt[MIN_FRAMES_EACH_SIDE - 1], tt[-MIN_FRAMES_EACH_SIDE], step_s)
+    if len(grid) < 2:
+        return None
+    stop_u = np.interp(grid, tt, ur)
+    res = us[None, :] - np.where(tt[None, :] < grid[:, None], ur[None, :], stop_u[:, None])
+    c = np.sum(w * res, axis=1) / np.sum(w)
+    chi2 = np.sum(w * (res - c[:, None]) ** 2, axis=1)
+    j = int(np.argmin(chi2))
+    r0 = us - ur
+    chi2_none = float(np.sum(w * (r0 - np.sum(w * r0) / np.sum(w)) ** 2))
+    dof = max(int(ok.sum()) - 2, 1)
+    scale = max(1.0, float(chi2[j]) / dof)
+    # a sixth of the width of the three-sigma interval (the profile is not a parabola: the stop
+    # moves in steps between frames, and the one-sigma width alone came out too narrow)
+    inside = grid[chi2 <= chi2[j] + 9.0 * scale]
+    sigma_ts = float(inside.max() - inside.min()) / 6.0 if len(inside) > 1 else step_s
+    pred = np.where(t < grid[j], u_rigid, np.interp(grid[j], tt, ur)) + c[j]
+    return (float(grid[j]), max(sigma_ts, step_s), float(stop_u[j] + c[j]), chi2_none - float(chi2[j]),
+            np.where(np.isfinite(u_seen), u_seen - pred, 0.0))
+
+
+def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_from: float,
+                 u_to: float, threshold: float, bg_shift: np.ndarray | None = None) -> tuple[float, float, int]:
+    """The car's front column in a band of rows: where it stops differing from the background.
+
+    In each row that starts on the car at ``u_from`` (behind the front), the end of the
+    run of columns towards ``u_to`` (ahead) whose difference from the background exceeds
+    ``threshold`` (it ends where :data:`GAP_SAMPLES` samples in a row do not), refined to
+    where the difference crosses it (linear between the two pixels); then the rows'
+    :data:`FORWARD_QUANTILE` in the direction of travel (the nose's most forward rows).
+
+    Parameters
+    ----------
+    gray, background : (H, W) float
+        The frame and the same view without the car there (an earlier frame).
+    rows : (R,) float
+        Rows to look at, px.
+    u_from, u_to : float
+        Search from behind the front to ahead of it, px (either order of columns).
+    threshold : float
+        Grey levels: half the car's own difference from the background.
+    bg_shift : (2,) px, optional
+        The camera's image shift of ``gray`` relative to ``background``.
+
+    Returns
+    -------
+    (u, sigma, rows_used)
+        The column px (NaN when fewer than three rows show the front), its one-sigma from
+        the rows' scatter (at least 0.1 px), and how many rows showed it.
+    """
+    from .calibrate_profile import sample
+
+    step = 0.5 if u_to > u_from else -0.5
+    us = np.arange(u_from, u_to + step / 2, step)
+    grid = np.stack(np.broadcast_arrays(us[None, :], np.asarray(rows, float)[:, None]), axis=-1)
+    shift = np.zeros(2) if bg_shift is None else np.asarray(bg_shift, float)
+    diff = np.abs(sample(gray, grid) - sample(background, grid - shift))
+    above = np.nan_to_num(diff, nan=0.0) > threshold
+    # the car's region runs on from ``u_from`` until the background shows for GAP samples
+    # (debris or a changed patch of background further ahead are not the car)
+    gap = np.ones(GAP_SAMPLES, int)
+    found = []
+    for r in range(len(rows)):
+        if not above[r, 0]:
+            continue
+        runs = np.convolve((~above[r]).astype(int), gap, mode="valid") == GAP_SAMPLES
+        starts = np.flatnonzero(runs)
+        if len(starts) == 0:
+            continue
+        j = starts[0] - 1  # the car's last sample above the threshold
+        a, b = diff[r, j], diff[r, j + 1]
+        frac = (a - threshold) / (a - b) if a > b else 0.5
+        found.append(us[j] + step * frac)
+    if len(found) < 3:
+        return float("nan"), float("nan"), len(found)
+    found = np.asarray(found)
+    # the nose's most forward rows touch first; the rows behind them go on until they
+    # reach the face too, so the rows' median would stop late
+    u = float(np.quantile(found * step, FORWARD_QUANTILE) / step)
+    spread = 1.4826 * float(np.median(np.abs(found - np.median(found))))
+    return u, float(max(spread / np.sqrt(len(found)), FRONT_FLOOR_PX)), len(found)
+
+
+def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: BodyPose,
+                nose_ref: np.ndarray, rows_ref: tuple[float, float], direction: int,
+                guess_s: float, *, to_pose: Callable[[int, np.ndarray], np.ndarray] | None = None,
+                search_px: float = 10.0) -> SeenContact:
+    """Look for the first contact in the picture (see the module's docstring).
+
+    The background is frame 0, where the car has not yet reached the columns searched
+    (frames whose search would reach back to the nose's place in frame 0 are skipped).
+
+    Parameters
+    ----------
+    frame_at : callable
+        ``frame_at(i)`` -> frame ``i`` of the film (read in increasing order).
+    t : (n,) s
+        Film clock of every frame.
+    pose : BodyPose
+        The passenger cell's pose per frame, px.
+    nose_ref : (2,) px
+        The undeformed front end (bumper's leading edge) in the pose's reference frame,
+        in the pose's coordinates.
+    rows_ref : (v_top, v_bottom) px
+        Band of rows of the front end in the reference frame; it is moved with the nose.
+    direction : +1 or -1
+        Direction of travel in the image.
+    guess_s : float
+        First guess of the contact (the deceleration onset), film clock s.
+    to_pose : callable, optional
+        ``to_pose(i, uv)`` -> raw image points (M, 2) of frame ``i`` in the pose's
+        coordinates (lens and camera shake taken out); identity when None.
+    search_px : float
+        How far behind and ahead of the predicted front end to look, px.
+
+    Returns
+    -------
+    SeenContact
+    """
+    from .calibrate_profile import to_gray
+
+    n = len(t)
+    fps = 1.0 / float(np.median(np.diff(t)))
+    i0 = max(int(np.floor((guess_s - WINDOW_BEFORE_S) * fps)), 1)
+    i1 = min(int(np.ceil((guess_s + WINDOW_AFTER_S) * fps)), n - 1)
+    if i1 - i0 < 2 * MIN_FRAMES_EACH_SIDE + 1:
+        return not_seen("too few frames around the deceleration onset")
+    to_pose = to_pose or (lambda i, uv: np.asarray(uv, float))
+    nose_ref = np.asarray(nose_ref, float)
+    d = direction
+
+    def to_raw(i, p):  # the inverse of to_pose to first order
+        p = np.asarray(p, float)
+        return p - (to_pose(i, p) - p)
+
+    if not np.isfinite(pose.point[0, 0]):
+        return not_seen("the car's pose is not measured in frame 0, whose picture is the background")
+    background = to_gray(frame_at(0))
+    nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
+    v0, v1 = sorted(rows_ref)
+    level, threshold = np.nan, np.nan
+    idx = np.arange(i0, i1 + 1)
+    u_rigid = np.full(len(idx), np.nan)
+    u_seen = np.full(len(idx), np.nan)
+    s_seen = np.full(len(idx), np.nan)
+    for k, i in enumerate(idx):
+        if not np.isfinite(pose.point[i, 0]):
+            continue
+        nose = pose.transform(i, nose_ref[None])[0]
+        u_rigid[k] = nose[0]
+        # from just ahead of where the car stood in frame 0 (the background behind that
+        # shows the car) to a little ahead of the rigid front end: the visible front end
+        # is the most forward column that differs from the background
+        raw = to_raw(i, np.array([[nose[0], nose[1]]]))[0]
+        u_from = nose0[0] + d * (search_px + 2.0)
+        if d * (raw[0] - u_from) < search_px:
+            continue  # the front end may still be behind the searched columns
+        dv = nose[1] - nose_ref[1]
+        rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
+        gray = to_gray(frame_at(int(i)))
+        shift = (raw - to_pose(i, raw[None])[0]) - (nose0 - to_pose(0, nose0[None])[0])
+        if not np.isfinite(level):
+            # the car's own difference from the background, just behind its front
+            from .calibrate_profile import sample
+
+            grid = np.stack(np.broadcast_arrays((raw[0] - d * np.arange(4.0, 16.0))[None, :], rows[:, None]), axis=-1)
+            car = np.abs(sample(gray, grid) - sample(background, grid - shift))
+            ahead = np.stack(np.broadcast_arrays((raw[0] + d * np.arange(3.0, 9.0))[None, :], rows[:, None]), axis=-1)
+            noise = 1.4826 * float(np.nanmedian(np.abs(sample(gray, ahead) - sample(background, ahead - shift))))
+            level = float(np.nanmedian(car))
+            if not level > max(CONTRAST_NOISES * noise, CONTRAST_MIN):
+                return not_seen(f"the car's front differs from the background by {level:.1f} grey levels "
+                                f"(noise {noise:.1f}): too little to see it stop")
+            threshold = 0.5 * level
+        u, sig, _ = front_column(gray, background, rows, u_from, raw[0] + d * search_px, threshold, shift)
+        if not np.isfinite(u):
+            continue
+        u = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
+        u_seen[k], s_seen[k] = u, sig
+    found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
+    if found is None:
+        return not_seen(f"the front end was followed in {int(np.isfinite(u_seen).sum())} of "
+                        f"{len(idx)} frames around the deceleration onset")
+    ts, ts_sig, stop_u, gain = found
+    if gain < MIN_CHI2_GAIN:
+        return not_seen(f"the front end does not stop in frames {i0}-{i1} (chi-square gain {gain:.1f})")
+    after = np.isfinite(u_seen) & (t[idx] >= ts)
+    stop_sig = float(np.sqrt(1.0 / np.sum(1.0 / s_seen[after] ** 2))) if after.any() else float("nan")
+    ts_sig = float(np.hypot(ts_sig, SEEN_FLOOR_FRAMES / fps))
+    return SeenContact("seen", ts, ts_sig, stop_u, stop_sig,
+                       f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: the front end stopped "
+                       f"at column {stop_u:.1f} px, in the car's own plane")
+
+
+#: The deceleration onset's one-sigma as a contact time, s: the RMS of its error on the
+#: reference world's calibration films (seeds 950000-950023), for judging a disagreement.
+ONSET_SIGMA_S = 0.0035
+
+
+def settle_contact(onset_s: float, seen: SeenContact) -> tuple[float, float | None, str]:
+    """The film's first contact from the deceleration onset and the picture.
+
+    A contact seen in the picture is the contact, a measurement apart from the motion the
+    fit fits (it comes with its sigma); the onset is compared with it and a disagreement
+    beyond three combined sigmas is said. Otherwise the onset stands, without a sigma (it
+    is the fitted motion's own).
+
+    Returns
+    -------
+    (time_s, sigma_s or None, note)
+    """
+    if seen.kind != "seen":
+        return onset_s, None, f"{seen.note}; contact from the deceleration onset alone"
+    diff = onset_s - seen.time_s
+    note = f"{seen.note}; the deceleration onset says {onset_s * 1e3:.2f} ms ({diff * 1e3:+.2f} ms)"
+    if abs(diff) > 3.0 * np.hypot(seen.sigma_s, ONSET_SIGMA_S):
+        note += (": the picture and the motion disagree (a front end that stopped for another reason, "
+                 "or a pulse that rises late); the picture's is used")
+    return seen.time_s, seen.sigma_s, note
