@@ -228,6 +228,27 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
     warned = fit_warnings(r)
     assert len(warned) == 1 and warned[0].startswith("contact_time fitted at 0.004") and "disagree there" in warned[0]
     assert fit_warnings(paper_fit) == []
+    # a contact measured 4.7 ms after t = 0 (a film's sub-frame contact seen in the picture)
+    # is where the prior sits: the same motion then agrees with it
+    seen = fit(dataclasses.replace(off, contact_time_s=0.0047), a4, model_error=NONE)
+    pull = seen.pulls()["contact_time"]
+    assert pull["prior"] == 0.0047 and not pull["conflict"] and abs(pull["pull"]) < 1.0
+
+
+def test_a_films_contact_seen_in_the_picture_enters_the_fit_as_a_measurement():
+    """``measurement_from_tracks``: a contact the picture showed comes with its sigma and its
+    sub-frame instant; one from the deceleration onset (the fitted motion's own) adds none."""
+    from identify.recording import measurement_from_tracks
+    from video.types import Tracks
+
+    t = np.arange(-10, 40) / 1000.0
+    base = dict(t=t, channels={"x_m": 15.0 * np.minimum(t, 0.0)}, sigma={"x_m": np.full(len(t), 1e-3)},
+                events_ms={}, contact_frame=10, fps=1000.0, scale_m_per_px=0.005, scale_sigma=1e-6,
+                impact_speed_mps=15.0, direction=1, contact_offset_s=-0.0003)
+    m = measurement_from_tracks(Tracks(**base, contact_sigma_s=0.001), "film.mp4")
+    assert (m.contact_time_s, m.contact_time_sigma) == (-0.0003, 0.001)
+    m = measurement_from_tracks(Tracks(**base), "film.mp4")
+    assert (m.contact_time_s, m.contact_time_sigma) == (0.0, None)
 
 
 def test_the_calibrated_model_error_is_added_in_quadrature_and_can_decide_identifiability(a4, paper_measurement,

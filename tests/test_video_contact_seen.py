@@ -145,3 +145,48 @@ def test_settling_the_contact_prefers_the_picture_and_says_a_disagreement():
     assert tc == 0.0200 and "disagree" in note
     tc, sig, note = settle_contact(0.0210, not_seen("too dark"))
     assert (tc, sig) == (0.0210, None) and "onset alone" in note
+
+
+def test_a_front_end_at_the_pictures_border_is_not_taken_for_the_front():
+    bg = _background()
+    img = _with_car(bg, 250.0, grey=200.0)  # a car lighter than any background covers it to its right border
+    u, _, used = front_column(img, bg, np.arange(5.0, 55.0), 150.0, 215.0, threshold=10.0)
+    assert used == 0 and np.isnan(u)
+
+
+def test_a_stop_without_frames_of_the_front_end_moving_before_it_is_not_seen():
+    # the front end can be told from frame 0's background only once it has moved past where
+    # it stood there: a stop before that leaves no frame of it moving with the cell
+    frames, pose, nose = _drawn_film(stop_frame=8.4)
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.012)
+    assert seen.kind == "not_seen" and "shows no clean stop" in seen.note
+
+
+def test_a_flickering_lamp_does_not_hide_the_stop():
+    frames, pose, nose = _drawn_film()
+    gain = 1.0 + 0.15 * np.sin(np.arange(len(frames)) * 2.1)  # the whole picture's brightness
+    lit = [np.clip(f * g, 0, 255).astype(np.uint8) for f, g in zip(frames, gain)]
+    t = np.arange(len(lit)) / FPS
+    seen = see_contact(lit.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+
+
+def test_a_camera_shaken_by_the_impact_is_taken_out_of_the_front_end():
+    import cv2
+
+    frames, pose, nose = _drawn_film()
+    n = len(frames)
+    shake = np.zeros((n, 2))
+    after = np.arange(n) >= 19  # the camera starts shaking with the impact
+    shake[after] = np.stack([3.0 * np.sin(0.9 * np.arange(n)), 1.5 * np.cos(1.3 * np.arange(n))], axis=1)[after]
+    shaken = [cv2.warpAffine(f, np.float32([[1, 0, dx], [0, 1, dy]]), (f.shape[1], f.shape[0]),
+                             flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+              for f, (dx, dy) in zip(frames, shake)]
+    t = np.arange(n) / FPS
+    seen = see_contact(shaken.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024,
+                       to_pose=lambda i, uv: np.asarray(uv, float) - shake[i])
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+    assert seen.stop_u_px == pytest.approx(230.0 - 2.5 * 20.4, abs=0.5)
