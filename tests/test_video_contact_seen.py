@@ -102,11 +102,14 @@ def test_the_front_column_against_a_textured_background(direction):
     assert sig >= 0.1
 
 
-def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1):
+def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None):
     """Frames of a car (uniform grey) whose front moves at ``v`` px/frame and stops at the
-    fractional frame ``stop_frame``, over a textured background, with a body pose that
-    keeps moving (the passenger cell goes on after contact)."""
+    fractional frame ``stop_frame``, over a textured background (left of the column
+    ``barrier_from``: a barrier as grey as the car), with a body pose that keeps moving
+    (the passenger cell goes on after contact)."""
     bg = _background(h=80, w=300, seed=4)
+    if barrier_from is not None:
+        bg[:, :barrier_from] = 115.0
     nose0 = 230.0
     frames, point = [], np.zeros((n, 2))
     for i in range(n):
@@ -190,3 +193,11 @@ def test_a_camera_shaken_by_the_impact_is_taken_out_of_the_front_end():
     assert seen.kind == "seen"
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
     assert seen.stop_u_px == pytest.approx(230.0 - 2.5 * 20.4, abs=0.5)
+
+
+def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping():
+    # the front end vanishes into the barrier's grey at column 175 (frame 22) and goes on
+    frames, pose, nose = _drawn_film(stop_frame=np.inf, barrier_from=175)
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "not_seen" and "cannot be told from passing on" in seen.note

@@ -293,6 +293,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     u_rigid = np.full(len(idx), np.nan)
     u_seen = np.full(len(idx), np.nan)
     s_seen = np.full(len(idx), np.nan)
+    last = None  # the last frame where the front end was found
     for k, i in enumerate(idx):
         if not np.isfinite(pose.point[i, 0]):
             continue
@@ -329,6 +330,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
             continue
         u = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
         u_seen[k], s_seen[k] = u, sig
+        last = (int(i), gray, rows, shift, float(nose[1]))
     found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
     if found is None:
         return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "
@@ -337,6 +339,16 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     ts, ts_sig, stop_u, gain = found
     if gain < MIN_CHI2_GAIN:
         return not_seen(f"the front end does not stop in frames {i0}-{i1} (chi-square gain {gain:.1f})")
+    # a stop where the car would not have stood out of the background had it gone on (the
+    # car as grey as the barrier it passes in front of) cannot be told from passing on
+    i_last, gray, rows, shift, v_nose = last
+    stop_raw = to_raw(i_last, np.array([[stop_u, v_nose]]))[0, 0]
+    car = np.nanmedian(sample(gray, _band(stop_raw - d * np.arange(2.0, 7.0), rows)), axis=1)
+    beyond = np.nanmedian(sample(background, _band(stop_raw + d * np.arange(2.0, 9.0), rows) - shift), axis=1)
+    if not np.mean(np.abs(car - beyond) > threshold) >= 0.5:
+        return not_seen(f"the front end stops at column {stop_u:.1f} px, but beyond it the car would not stand "
+                        "out of what is behind it there (as grey as the barrier it would pass in front of): "
+                        "a stop cannot be told from passing on")
     after = np.isfinite(u_seen) & (t[idx] >= ts)
     stop_sig = float(np.sqrt(1.0 / np.sum(1.0 / s_seen[after] ** 2))) if after.any() else float("nan")
     ts_sig = float(np.hypot(ts_sig, SEEN_FLOOR_FRAMES / fps))
