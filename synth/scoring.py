@@ -9,7 +9,8 @@ import numpy as np
 
 
 def tracking_errors(x_measured, contact_frame: int, truth: dict, max_shift_s: float = 1e-3,
-                    window_s: tuple[float, float] = (-0.015, 0.250)) -> dict:
+                    window_s: tuple[float, float] = (-0.015, 0.250),
+                    contact_time_s: float | None = None) -> dict:
     """Body-x error of a tracked film against its truth, frame for frame.
 
     Measured x is the CG displacement from where it was at the *measured* contact frame;
@@ -29,13 +30,18 @@ def tracking_errors(x_measured, contact_frame: int, truth: dict, max_shift_s: fl
         Largest time shift tried, s.
     window_s : (float, float)
         True-time window scored, s.
+    contact_time_s : float, optional
+        The measured first contact to a fraction of a frame, s after frame 0 (the contact
+        frame's time plus the tracker's sub-frame offset): what the fit is given.
 
     Returns
     -------
     dict
         ``x_rms_mm`` (None when fewer than 10 frames were measured), ``shift_ms``,
         ``measured_share`` (frames of the window with an x), ``video_contact_err_ms``
-        (measured contact frame minus the true one, in ms).
+        (measured contact frame minus the frame nearest the true contact, in ms: a label
+        rounded to whole frames) and, with ``contact_time_s``, ``video_contact_time_err_ms``
+        (measured contact time minus the true one, ms).
     """
     tt = np.asarray(truth["series"]["t_ms"], dtype=float) / 1e3
     xt = np.asarray(truth["series"]["x_m"], dtype=float)
@@ -49,6 +55,8 @@ def tracking_errors(x_measured, contact_frame: int, truth: dict, max_shift_s: fl
     out = {"x_rms_mm": None, "shift_ms": None,
            "measured_share": float(np.mean(np.isfinite(xm[window]))) if window.any() else float("nan"),
            "video_contact_err_ms": (c_meas - c_true) / float(truth["fps"]) * 1e3}
+    if contact_time_s is not None:  # the truth's frame 0 stands -tt[0] s before contact
+        out["video_contact_time_err_ms"] = (float(contact_time_s) + float(tt[0])) * 1e3
     if ok.sum() < 10 or not 0 <= c_meas < n:
         return out
     best = (math.inf, 0.0)

@@ -207,6 +207,11 @@ def test_scoring_rules():
     truth = {"fps": 1000.0, "series": {"t_ms": t * 1e3, "x_m": x}}
     exact = tracking_errors(x, 20, truth)
     assert exact["x_rms_mm"] < 1e-9 and exact["video_contact_err_ms"] == 0
+    # contact 0.4 frame after frame 20 (the truth's frame 0 is 20.4 ms before it), measured
+    # as frame 21 less 0.3 ms: 0.3 ms late; the frame label, 21 against the nearest 20, 1 ms
+    sub = {"fps": 1000.0, "series": {"t_ms": (t - 0.4e-3) * 1e3, "x_m": x}}
+    err = tracking_errors(x, 21, sub, contact_time_s=0.021 - 0.0003)
+    assert err["video_contact_time_err_ms"] == pytest.approx(0.3) and err["video_contact_err_ms"] == 1.0
     late = tracking_errors(np.interp(t + 1e-3, t, x) - np.interp(1e-3, t, x), 20, truth)
     assert late["x_rms_mm"] < 0.05 and late["shift_ms"] == pytest.approx(1.0)
     wrong = tracking_errors(np.interp(t + 3e-3, t, x) - np.interp(3e-3, t, x), 20, truth)

@@ -4,6 +4,8 @@ ahead of it, and the whole search on drawn frames of a car that stops at a known
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,7 @@ from video.contact_seen import (
     SeenContact,
     front_column,
     not_seen,
+    raw_points,
     see_contact,
     settle_contact,
     stop_time,
@@ -37,7 +40,7 @@ def test_the_stop_is_found_between_frames_with_an_honest_sigma():
     for seed in range(40):
         ts_true = 0.0124 + 0.00037 * (seed % 7)
         t, rigid, seen, sig = _series(ts=ts_true, seed=seed)
-        ts, ts_sig, stop_u, gain = stop_time(t, rigid, seen, sig, 0.02 / FPS)
+        ts, ts_sig, stop_u, gain, _ = stop_time(t, rigid, seen, sig, 0.02 / FPS)
         errs.append(ts - ts_true)
         sigs.append(ts_sig)
         assert gain > MIN_CHI2_GAIN
@@ -102,10 +105,11 @@ def test_the_front_column_against_a_textured_background(direction):
     assert sig >= 0.1
 
 
-def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None):
+def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None, occluder_from=None):
     """Frames of a car (uniform grey) whose front moves at ``v`` px/frame and stops at the
     fractional frame ``stop_frame``, over a textured background (left of the column
-    ``barrier_from``: a barrier as grey as the car), with a body pose that keeps moving
+    ``barrier_from``: a barrier as grey as the car; left of ``occluder_from``: a darker
+    barrier nearer the camera, in front of the car), with a body pose that keeps moving
     (the passenger cell goes on after contact)."""
     bg = _background(h=80, w=300, seed=4)
     if barrier_from is not None:
@@ -115,7 +119,10 @@ def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None):
     for i in range(n):
         rigid = nose0 + v * i
         front = rigid if i < stop_frame else nose0 + v * stop_frame
-        frames.append(np.clip(_with_car(bg, front, grey=115.0, direction=direction), 0, 255).astype(np.uint8))
+        img = _with_car(bg, front, grey=115.0, direction=direction)
+        if occluder_from is not None:
+            img[:, :occluder_from] = 60.0
+        frames.append(np.clip(img, 0, 255).astype(np.uint8))
         point[i] = (rigid + 100.0, 40.0)
     pose = BodyPose(point=point, point_sigma=np.full(n, 0.05), phi=np.zeros(n), phi_sigma=np.full(n, 1e-4),
                     rms_px=np.zeros(n), n_targets=np.full(n, 3), ref_frame=0)
@@ -201,3 +208,43 @@ def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping(
     t = np.arange(len(frames)) / FPS
     seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
     assert seen.kind == "not_seen" and "cannot be told from passing on" in seen.note
+
+
+def test_a_car_going_behind_a_barrier_nearer_the_camera_is_not_seen_stopping():
+    # the barrier's edge (column 175) hides the front end from frame 22 on: in the picture
+    # it stops there, though it never touched anything
+    frames, pose, nose = _drawn_film(stop_frame=np.inf, occluder_from=175)
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "not_seen" and "cannot be told from going behind it" in seen.note
+
+
+@pytest.mark.parametrize("off", [12.0, -6.0])
+def test_a_vehicle_outline_whose_nose_stands_off_the_pictures_is_set_right_by_the_picture(off):
+    # the outline's nose 12 px behind (or 6 px ahead of) the car's front in the picture: the
+    # front end is looked for around the picture's front, and the note says how far off
+    frames, pose, nose = _drawn_film()
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose + np.array([off, 0.0]), (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+    stood = re.search(r"front stood ([\d.]+) px (ahead of|behind) the vehicle outline's nose", seen.note)
+    assert stood and stood.group(2) == ("ahead of" if off > 0 else "behind")
+    # it centres a search 10 px either side: a pixel is plenty (the textured background's
+    # fixed-threshold bias is up to half a pixel at each of the two fronts it compares)
+    assert float(stood.group(1)) == pytest.approx(abs(off), abs=1.0)
+
+
+def test_points_are_taken_back_to_the_raw_picture_through_a_strong_lens():
+    # barrel distortion that moves a point near the corner of a 1024 x 820 picture by about
+    # 20 px (as on a reference-world film): the inverse must land within 0.05 px
+    centre, k1, r0 = np.array([512.0, 410.0]), 0.08, 656.0
+
+    def to_pose(i, uv):
+        q = (np.asarray(uv, float) - centre) / r0
+        return centre + r0 * q * (1 + k1 * np.sum(q**2, axis=-1, keepdims=True))
+
+    p = np.array([[960.0, 470.0], [100.0, 60.0], [512.0, 410.0]])
+    raw = raw_points(to_pose, 0, p)
+    assert np.max(np.abs(to_pose(0, raw) - p)) < 0.05
+    assert np.max(np.abs(raw - p)) > 15.0  # the lens does move them

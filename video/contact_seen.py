@@ -61,6 +61,17 @@ CONTRAST_MIN = 6.0
 #: seen, and 2 frames (+4 ms, debris at the face) on both at 500 fps (seeds 960000-960029,
 #: which no test and no benchmark scores).
 SEEN_FLOOR_FRAMES = 1.0
+#: Fixed-point steps inverting the lens's and shake's correction (each shrinks the error
+#: by the correction's relative change across it, 0.1 or less)
+TO_RAW_STEPS = 4
+#: A stop where frame 0 steps by more than the threshold, one way, in this share of the rows
+#: from two nose heights above to two below, is at the edge of something nearer the camera.
+EDGE_ROWS_SHARE = 0.6
+#: How far ahead of the vehicle outline's nose the picture's front end is looked for, px.
+LOCATE_PX = 40.0
+#: A picture's front further than this from the outline's nose moves the nose the front
+#: end is searched around, and is said in the note, px.
+NOSE_OFF_PX = 2.0
 
 
 @dataclass(frozen=True)
@@ -120,11 +131,12 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
 
     Returns
     -------
-    (ts, ts_sigma, u_stop, chi2_gain) or None
+    (ts, ts_sigma, u_stop, chi2_gain, reduced_chi2) or None
         Stop time (s) and its one-sigma from the chi-square profile on the best window's
         frames (a sixth of the width where it rises by 9, scaled by the reduced
         chi-square when above 1), the stop column px, and how much the stop lowers the
-        chi-square on those frames against a front end that never stops. None when no
+        chi-square on those frames against a front end that never stops, and the reduced
+        chi-square of the stop on them (outliers left out). None when no
         window has :data:`MIN_FRAMES_EACH_SIDE` seen frames on either side of the stop, or
         the best has too many outliers.
     """
@@ -164,7 +176,8 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
     near = np.abs(grid - grid[j]) <= FRAMES_AFTER * dt
     within = grid[near & (prof <= prof[j] + 9.0 * scale)]
     sigma_ts = float(within.max() - within.min()) / 6.0 if len(within) > 1 else step_s
-    return float(grid[j]), max(sigma_ts, step_s), float(stop_u[j] + cm[j]), chi2_none - float(prof[j])
+    reduced = float(prof[j]) / max(int(mask.sum()) - 2, 1)
+    return float(grid[j]), max(sigma_ts, step_s), float(stop_u[j] + cm[j]), chi2_none - float(prof[j]), reduced
 
 
 def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_from: float,
@@ -279,17 +292,25 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     nose_ref = np.asarray(nose_ref, float)
     d = direction
 
-    def to_raw(i, p):  # the inverse of to_pose to first order
-        p = np.asarray(p, float)
-        return p - (to_pose(i, p) - p)
+    def to_raw(i, p):
+        return raw_points(to_pose, i, p)
 
     if not np.isfinite(pose.point[0, 0]):
         return not_seen("the car's pose is not measured in frame 0, whose picture is the background")
     background = to_gray(frame_at(0))
-    nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
     v0, v1 = sorted(rows_ref)
-    level, threshold = np.nan, np.nan
+    nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
+    # the picture's front against the outline's nose (a vehicle file's outline or CG may
+    # stand a few cm off the car's), once, in the first frame where the car has left its
+    # place in frame 0 far enough; the nose is moved by it
     idx = np.arange(i0, i1 + 1)
+    located = _locate_front(frame_at, idx, pose, nose_ref, nose0, (v0, v1), d, background, to_pose, search_px)
+    if isinstance(located, str):
+        return not_seen(located)
+    if abs(located) > NOSE_OFF_PX:  # within it the search's margins hold the front
+        nose_ref = nose_ref + np.array([located, 0.0])
+        nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
+    level, threshold = np.nan, np.nan
     u_rigid = np.full(len(idx), np.nan)
     u_seen = np.full(len(idx), np.nan)
     s_seen = np.full(len(idx), np.nan)
@@ -336,7 +357,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "
                         "around the deceleration onset, shows no clean stop (too few frames on one side "
                         "of it, or more than a quarter of them off a stop)")
-    ts, ts_sig, stop_u, gain = found
+    ts, ts_sig, stop_u, gain, reduced = found
     if gain < MIN_CHI2_GAIN:
         return not_seen(f"the front end does not stop in frames {i0}-{i1} (chi-square gain {gain:.1f})")
     # a stop where the car would not have stood out of the background had it gone on (the
@@ -349,12 +370,75 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         return not_seen(f"the front end stops at column {stop_u:.1f} px, but beyond it the car would not stand "
                         "out of what is behind it there (as grey as the barrier it would pass in front of): "
                         "a stop cannot be told from passing on")
+    # a stop at a straight edge of frame 0 running far above and below the nose (a barrier's
+    # edge nearer the camera than the car's side hides the nose before it touches the
+    # face) cannot be told from contact; a textured background's edges do not run on
+    tall = np.arange(max(rows[0] - 2 * len(rows), 2), min(rows[-1] + 2 * len(rows), background.shape[0] - 3) + 1)
+    step = (np.nanmedian(sample(background, _band(stop_raw + d * np.arange(2.0, 7.0), tall) - shift), axis=1)
+            - np.nanmedian(sample(background, _band(stop_raw - d * np.arange(2.0, 7.0), tall) - shift), axis=1))
+    step = step[np.isfinite(step)]
+    if len(step) >= len(rows) and max(np.mean(step > threshold), np.mean(step < -threshold)) >= EDGE_ROWS_SHARE:
+        return not_seen(f"the front end stops at column {stop_u:.1f} px, where frame 0 shows an edge (a barrier "
+                        "edge nearer the camera than the car's side hides the nose before it touches the face): "
+                        "a stop cannot be told from going behind it")
     after = np.isfinite(u_seen) & (t[idx] >= ts)
     stop_sig = float(np.sqrt(1.0 / np.sum(1.0 / s_seen[after] ** 2))) if after.any() else float("nan")
     ts_sig = float(np.hypot(ts_sig, SEEN_FLOOR_FRAMES / fps))
+    off = (f" (the picture's front stood {abs(located):.1f} px {'ahead of' if d * located > 0 else 'behind'} "
+           "the vehicle outline's nose)" if abs(located) > NOSE_OFF_PX else "")
     return SeenContact("seen", ts, ts_sig, stop_u, stop_sig,
                        f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: the front end stopped "
-                       f"at column {stop_u:.1f} px, in the car's own plane")
+                       f"at column {stop_u:.1f} px, in the car's own plane{off}; reduced chi-square {reduced:.1f}")
+
+
+def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background, to_pose,
+                  search_px) -> float | str:
+    """The column shift (px, pose coordinates) from the outline's nose to the picture's
+    front end: in the first frame of ``idx`` where the nose has moved at least
+    ``2 * search_px + 4`` px from frame 0, the end of the run of
+    columns that differ from frame 0, searched from half-way between the nose's place in
+    frame 0 and now (columns the car covers in this frame and did not in frame 0) up to
+    :data:`LOCATE_PX` ahead. A sentence saying why when it cannot be found."""
+    from .calibrate_profile import sample, to_gray
+
+    v0, v1 = rows_ref
+    for i in idx:
+        if not np.isfinite(pose.point[i, 0]):
+            continue
+        nose = pose.transform(i, nose_ref[None])[0]
+        raw = raw_points(to_pose, i, nose[None])[0]
+        moved = d * (raw[0] - nose0[0])
+        if moved < 2 * search_px + 4:
+            continue
+        dv = nose[1] - nose_ref[1]
+        rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
+        shift = to_pose(0, raw[None])[0] - to_pose(i, raw[None])[0]
+        gray = to_gray(frame_at(int(i)))
+        gray = gray / _brightness_ratio(gray, background, rows, raw[0] + d * LOCATE_PX, d, shift)
+        mid = 0.5 * (raw[0] + nose0[0])
+        new = _band(mid + d * np.linspace(-0.25, 0.25, 9) * moved, rows)
+        level = float(np.nanmedian(np.abs(sample(gray, new) - sample(background, new - shift))))
+        if not level > CONTRAST_MIN:
+            return (f"the car's front differs from the background by {level:.1f} grey levels in frame {i}: "
+                    "too little to see it stop")
+        u, _, _ = front_column(gray, background, rows, mid, raw[0] + d * LOCATE_PX, 0.5 * level, shift)
+        if not np.isfinite(u):
+            return (f"the car's front end not found in frame {i} within {LOCATE_PX:g} px ahead of the "
+                    "vehicle outline's nose")
+        return float(to_pose(i, np.array([[u, nose[1]]]))[0, 0] - nose[0])
+    return (f"the car does not move {2 * search_px + 4:g} px from where it stood in frame 0 within frames "
+            f"{idx[0]}-{idx[-1]} around the deceleration onset: no background to see its front against")
+
+
+def raw_points(to_pose: Callable[[int, np.ndarray], np.ndarray], i: int, p: np.ndarray) -> np.ndarray:
+    """The raw image points (M, 2) px of frame ``i`` that ``to_pose`` takes to ``p``: its
+    inverse by :data:`TO_RAW_STEPS` fixed-point steps (a strong lens moves a point by 20 px,
+    and one step alone leaves 2-3 px of it)."""
+    p = np.asarray(p, float)
+    raw = p.copy()
+    for _ in range(TO_RAW_STEPS):
+        raw = raw - (to_pose(i, raw) - p)
+    return raw
 
 
 def _band(us: np.ndarray, rows: np.ndarray) -> np.ndarray:
