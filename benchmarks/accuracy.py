@@ -100,11 +100,11 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
         row["status"] = "ok"
         if ident.recording.tracks is not None:
             tracks = ident.recording.tracks
-            offset_ms = 1e3 * tracks.contact_offset_s  # the seen contact's fraction of a frame
             row["tracking"] = tracking_errors(tracks.channels["x_m"], tracks.contact_frame, truth,
-                                              contact_time_s=tracks.contact_frame / tracks.fps + offset_ms / 1e3)
+                                              contact_time_s=tracks.contact_time_s)
             # the fit's contact time counts from the contact frame
-            row["fit_contact_err_ms"] = row["tracking"]["video_contact_time_err_ms"] - offset_ms + doc["contact_time_ms"]
+            row["fit_contact_err_ms"] = (row["tracking"]["video_contact_time_err_ms"] - 1e3 * tracks.contact_offset_s
+                                         + doc["contact_time_ms"])
             contact = doc.get("nuisance", {}).get("contact_time", {})
             if contact.get("std_data"):
                 row["contact_std_data_ms"] = 1e3 * contact["std_data"]

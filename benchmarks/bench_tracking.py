@@ -61,7 +61,7 @@ def track_world(seed: int, effect: str, baseline: str) -> dict:
                 row[name] = {"refused": str(err)}
                 continue
             err = tracking_errors(tracks.channels["x_m"], tracks.contact_frame, truth,
-                                  contact_time_s=tracks.contact_frame / tracks.fps + tracks.contact_offset_s)
+                                  contact_time_s=tracks.contact_time_s)
             x_px = None if err["x_rms_mm"] is None else err["x_rms_mm"] / 1e3 / tracks.scale_m_per_px
             row[name] = {**err, "x_rms_px": x_px, "t_s": time.perf_counter() - t0,
                          "speed_err_pct": 100 * (tracks.impact_speed_mps * 3.6 / truth["v0_kmh"] - 1)}

@@ -170,13 +170,13 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
     prof = np.sum(wm[None, :] * (res - cm[:, None]) ** 2, axis=1)
     r0 = us - ur
     chi2_none = float(np.sum(wm * (r0 - np.sum(wm * r0) / np.sum(wm)) ** 2))
-    scale = max(1.0, float(prof[j]) / max(int(mask.sum()) - 2, 1))
+    reduced = float(prof[j]) / max(int(mask.sum()) - 2, 1)
+    scale = max(1.0, reduced)
     # a sixth of the width of the three-sigma interval (the profile is not a parabola: the
     # stop moves in steps between frames, and the one-sigma width alone came out too narrow)
     near = np.abs(grid - grid[j]) <= FRAMES_AFTER * dt
     within = grid[near & (prof <= prof[j] + 9.0 * scale)]
     sigma_ts = float(within.max() - within.min()) / 6.0 if len(within) > 1 else step_s
-    reduced = float(prof[j]) / max(int(mask.sum()) - 2, 1)
     return float(grid[j]), max(sigma_ts, step_s), float(stop_u[j] + cm[j]), chi2_none - float(prof[j]), reduced
 
 
@@ -213,7 +213,7 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
 
     step = 0.5 if u_to > u_from else -0.5
     us = np.arange(u_from, u_to + step / 2, step)
-    grid = np.stack(np.broadcast_arrays(us[None, :], np.asarray(rows, float)[:, None]), axis=-1)
+    grid = _band(us, rows)
     shift = np.zeros(2) if bg_shift is None else np.asarray(bg_shift, float)
     diff = np.abs(sample(gray, grid) - sample(background, grid - shift))
     above = np.nan_to_num(diff, nan=0.0) > threshold
@@ -318,21 +318,15 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     for k, i in enumerate(idx):
         if not np.isfinite(pose.point[i, 0]):
             continue
-        nose = pose.transform(i, nose_ref[None])[0]
+        nose, raw, rows, shift = _nose_in_frame(pose, i, nose_ref, (v0, v1), to_pose)
         u_rigid[k] = nose[0]
         # from just ahead of where the car stood in frame 0 (the background behind that
         # shows the car) to a little ahead of the rigid front end: the visible front end
         # is the most forward column that differs from the background
-        raw = to_raw(i, np.array([[nose[0], nose[1]]]))[0]
         u_from = nose0[0] + d * (search_px + 2.0)
         if d * (raw[0] - u_from) < search_px:
             continue  # the front end may still be behind the searched columns
-        dv = nose[1] - nose_ref[1]
-        rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
-        gray = to_gray(frame_at(int(i)))
-        # the camera's shake since frame 0 at this point (the lens's correction cancels)
-        shift = to_pose(0, raw[None])[0] - to_pose(i, raw[None])[0]
-        gray = gray / _brightness_ratio(gray, background, rows, raw[0] + d * (search_px + 2.0), d, shift)
+        gray = _frame_against(frame_at, i, background, rows, raw[0] + d * (search_px + 2.0), d, shift)
         if not np.isfinite(level):
             # the car's own difference from the background just behind its front, and the
             # background's own (noise, compression) just ahead of it
@@ -399,22 +393,16 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
     columns that differ from frame 0, searched from half-way between the nose's place in
     frame 0 and now (columns the car covers in this frame and did not in frame 0) up to
     :data:`LOCATE_PX` ahead. A sentence saying why when it cannot be found."""
-    from .calibrate_profile import sample, to_gray
+    from .calibrate_profile import sample
 
-    v0, v1 = rows_ref
     for i in idx:
         if not np.isfinite(pose.point[i, 0]):
             continue
-        nose = pose.transform(i, nose_ref[None])[0]
-        raw = raw_points(to_pose, i, nose[None])[0]
+        nose, raw, rows, shift = _nose_in_frame(pose, i, nose_ref, rows_ref, to_pose)
         moved = d * (raw[0] - nose0[0])
         if moved < 2 * search_px + 4:
             continue
-        dv = nose[1] - nose_ref[1]
-        rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
-        shift = to_pose(0, raw[None])[0] - to_pose(i, raw[None])[0]
-        gray = to_gray(frame_at(int(i)))
-        gray = gray / _brightness_ratio(gray, background, rows, raw[0] + d * LOCATE_PX, d, shift)
+        gray = _frame_against(frame_at, i, background, rows, raw[0] + d * LOCATE_PX, d, shift)
         mid = 0.5 * (raw[0] + nose0[0])
         new = _band(mid + d * np.linspace(-0.25, 0.25, 9) * moved, rows)
         level = float(np.nanmedian(np.abs(sample(gray, new) - sample(background, new - shift))))
@@ -428,6 +416,30 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
         return float(to_pose(i, np.array([[u, nose[1]]]))[0, 0] - nose[0])
     return (f"the car does not move {2 * search_px + 4:g} px from where it stood in frame 0 within frames "
             f"{idx[0]}-{idx[-1]} around the deceleration onset: no background to see its front against")
+
+
+def _nose_in_frame(pose: BodyPose, i: int, nose_ref: np.ndarray, rows_ref: tuple[float, float],
+                   to_pose: Callable[[int, np.ndarray], np.ndarray]) -> tuple:
+    """Where the rigidly carried nose is in frame ``i``: (nose in pose coordinates, the
+    same in the raw picture, the nose's rows there, and the camera's shake since frame 0
+    at that point (the lens's correction cancels)), px."""
+    nose = pose.transform(i, nose_ref[None])[0]
+    raw = raw_points(to_pose, i, nose[None])[0]
+    v0, v1 = rows_ref
+    dv = nose[1] - nose_ref[1]
+    rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
+    shift = to_pose(0, raw[None])[0] - to_pose(i, raw[None])[0]
+    return nose, raw, rows, shift
+
+
+def _frame_against(frame_at, i: int, background: np.ndarray, rows: np.ndarray, ratio_from: float,
+                   direction: int, shift: np.ndarray) -> np.ndarray:
+    """Frame ``i`` in grey, brought to the background's brightness (measured from the
+    column ``ratio_from`` px on, where the car is not)."""
+    from .calibrate_profile import to_gray
+
+    gray = to_gray(frame_at(int(i)))
+    return gray / _brightness_ratio(gray, background, rows, ratio_from, direction, shift)
 
 
 def raw_points(to_pose: Callable[[int, np.ndarray], np.ndarray], i: int, p: np.ndarray) -> np.ndarray:

@@ -115,3 +115,9 @@ class Tracks:
     contact_sigma_s: float | None = None
     overlay: dict = field(default_factory=dict)
     geometry: dict = field(default_factory=dict)
+
+    @property
+    def contact_time_s(self) -> float:
+        """First contact on the film's clock, s after frame 0 (the contact frame's time
+        plus ``contact_offset_s``)."""
+        return self.contact_frame / self.fps + self.contact_offset_s
