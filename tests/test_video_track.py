@@ -392,3 +392,37 @@ def test_repeated_frame_while_moving_is_not_a_measurement(clean_film):
     assert np.isfinite(tracks.channels["x_m"][12]) and np.isfinite(tracks.channels["x_m"][14])
     assert any("repeat the frame before" in n and "13" in n for n in tracks.notes)
     assert abs(tracks.contact_frame - (meta["contact_frame"] + 1)) <= 1
+
+
+def test_real_frame_flagged_as_repeat_is_kept(clean_film):
+    """A low-noise film compressed hard can make a real frame look like the one before
+    (the car is a small part of the picture); where the targets moved, it is data."""
+    car, film, truth, meta = clean_film
+    flagged = ArrayFilm(list(film.frames))
+    flagged.duplicates = np.array([8, 13])
+    tracks = track_film(flagged, car)
+    assert np.isfinite(tracks.channels["x_m"][8]) and np.isfinite(tracks.channels["x_m"][13])
+    assert np.isfinite(tracks.channels["target0_u_px"][13])
+    assert not any("repeat the frame before" in n for n in tracks.notes)
+    assert any(n.startswith("2 frame(s) that hardly differ") for n in tracks.notes)
+
+
+def test_a_target_without_a_velocity_of_its_own_moves_as_its_nearest_neighbour():
+    """Target 1 was seen in frame 0 only (a garbled key frame hid it in frame 1): in frame
+    4 it is predicted where its neighbour's motion since frame 0 takes it, not where it
+    stood (the car moves 3 px a frame; the search grows by 2 px a frame of gap)."""
+    from video.track import _predict
+
+    uv = np.full((5, 3, 2), np.nan)
+    for i in range(4):
+        uv[i, 0] = [100.0 + 3.0 * i, 50.0]      # a body target next to it
+        uv[i, 2] = [400.0, 80.0]                # a fixed target, farther away
+    uv[0, 1] = [110.0, 60.0]
+    angle = np.zeros((5, 3))
+    last = np.array([3, 0, 3])
+    pred, _, gap = _predict(uv, angle, 4, 1, last)
+    assert gap == 4
+    np.testing.assert_allclose(pred, [110.0 + 12.0, 60.0])
+    uv[4, 0] = [112.5, 50.0]                    # found in this frame already: its own step
+    pred, _, _ = _predict(uv, angle, 4, 1, last)
+    np.testing.assert_allclose(pred, [122.5, 60.0])

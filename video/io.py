@@ -570,7 +570,8 @@ def open_film(
             )
     if film.duplicates.size:
         film.notes.append(
-            f"{film.duplicates.size} duplicated frame(s) (repeating the frame before; re-encoding?): "
-            f"{_describe_runs(film.duplicates)}; their times are not independent measurements"
+            f"{film.duplicates.size} frame(s) hardly differ from the one before (a repeat from "
+            f"re-encoding, or a still or small moving subject under strong compression): "
+            f"{_describe_runs(film.duplicates)}"
         )
     return film

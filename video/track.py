@@ -5,7 +5,7 @@ Tracking: the targets found in the first frame are followed through the film. Ea
 target's position is predicted from its last positions (constant velocity; after a
 gap, from the displacement of the target that moved most like it), the saddle response
 is searched in a window around the prediction, the centre refined
-(``video.targets.refine_gradient``) and the detection checked (radius, contrast,
+(``video.targets.refine_centre``: gradient orthogonality, then point symmetry) and the detection checked (radius, contrast,
 quadrant symmetry). A detection that fails the checks is not used: the target is lost
 in that frame (NaN, and a note names the frames), never interpolated. The pattern's
 orientation is unwrapped over frames (hub targets: the wheel's spin angle).
@@ -36,7 +36,7 @@ from video.targets import (
     centre_sigma,
     detect_targets,
     orientation,
-    refine_gradient,
+    refine_centre,
     saddle_response,
     symmetry_errors,
     target_radius,
@@ -240,7 +240,7 @@ def follow_target(gray: np.ndarray, pred: np.ndarray, radius: float, contrast: f
 def _check(gray: np.ndarray, start: np.ndarray, radius: float, contrast: float,
            config: TrackerConfig) -> np.ndarray | None:
     """Refine a candidate centre and check it is the target: (centre, contrast) or None."""
-    c = refine_gradient(gray, start, radius)
+    c = refine_centre(gray, start, radius)
     if not np.all(np.isfinite(c)) or np.hypot(*(c - start)) > 0.5 * radius:
         return None
     r, con = target_radius(gray, c, config.detect, expected=radius)
@@ -257,35 +257,59 @@ def _check(gray: np.ndarray, start: np.ndarray, radius: float, contrast: float,
 def _predict(uv: np.ndarray, angle: np.ndarray, i: int, k: int, last: np.ndarray
              ) -> tuple[np.ndarray, float, int]:
     """Predicted centre and orientation of target ``k`` in frame ``i``; and the gap
-    (frames since it was last seen)."""
+    (frames since it was last seen).
+
+    Constant velocity from its last two positions; after a gap, the displacement of the
+    target that moved most like it before the gap. A target without a velocity of its
+    own (seen in one frame before a gap, or only in frame 0) moves as the target nearest
+    to it in the picture did since it was last seen (neighbouring targets share the body
+    they are on; a fixed neighbour predicts it standing still, as the fallback does)."""
     L = last[k]
     gap = i - L
     p1 = uv[L, k]
     a1 = angle[L, k]
     prev = L - 1
-    if prev >= 0 and np.isfinite(uv[prev, k, 0]):
-        vel = p1 - uv[prev, k]
-        spin = angle[L, k] - angle[prev, k]
-    else:
-        vel = np.zeros(2)
-        spin = 0.0
+    if not (prev >= 0 and np.isfinite(uv[prev, k, 0])):
+        return p1 + _neighbour_displacement(uv, i, k, L), a1, gap
+    vel = p1 - uv[prev, k]
+    spin = angle[L, k] - angle[prev, k]
     if gap > 1:
         # the target that moved most like this one, seen in L and i - 1
         best, best_d = None, np.inf
         for j in range(uv.shape[1]):
             if j == k or not (np.isfinite(uv[L, j, 0]) and np.isfinite(uv[i - 1, j, 0])):
                 continue
-            if prev >= 0 and np.isfinite(uv[prev, j, 0]):
+            if np.isfinite(uv[prev, j, 0]):
                 d = np.hypot(*((uv[L, j] - uv[prev, j]) - vel))
-            else:
-                d = np.inf
-            if d < best_d:
-                best, best_d = j, d
+                if d < best_d:
+                    best, best_d = j, d
         if best is not None and best_d < 2.0 + 0.2 * np.hypot(*vel):
             j = best
             step = uv[i - 1, j] - uv[i - 2, j] if i - 2 >= 0 and np.isfinite(uv[i - 2, j, 0]) else vel
             return p1 + (uv[i - 1, j] - uv[L, j]) + step, a1 + spin * gap, gap
     return p1 + vel * gap, a1 + spin * gap, gap
+
+
+def _neighbour_displacement(uv: np.ndarray, i: int, k: int, L: int) -> np.ndarray:
+    """Displacement from frame ``L`` to frame ``i`` of the target nearest to ``k`` in frame
+    ``L`` among those seen in ``L`` and since (in ``i`` itself when it was found there
+    already, else in ``i - 1`` plus its last step), px; zero when there is none."""
+    best, best_d = None, np.inf
+    for j in range(uv.shape[1]):
+        if j == k or not np.isfinite(uv[L, j, 0]):
+            continue
+        if not (np.isfinite(uv[i, j, 0]) or np.isfinite(uv[i - 1, j, 0])):
+            continue
+        d = float(np.hypot(*(uv[L, j] - uv[L, k])))
+        if d < best_d:
+            best, best_d = j, d
+    if best is None:
+        return np.zeros(2)
+    j = best
+    if np.isfinite(uv[i, j, 0]):
+        return uv[i, j] - uv[L, j]
+    step = uv[i - 1, j] - uv[i - 2, j] if i - 2 >= 0 and np.isfinite(uv[i - 2, j, 0]) else 0.0
+    return uv[i - 1, j] - uv[L, j] + step
 
 
 def track_targets(frames: Iterable[np.ndarray], n_frames: int, first: Detections,
@@ -399,29 +423,44 @@ def _angle_sigma(spin: np.ndarray, rolling: np.ndarray, stop: int) -> float:
 
 
 def _drop_repeated_frames(tt: TargetTracks, duplicates, notes: list,
-                          min_motion_px: float = 1.0) -> list:
+                          min_motion_px: float = 0.5, still_share: float = 0.25) -> list:
     """Blank (NaN) the target samples of frames that repeat the frame before while the
     targets move (a re-encoding artefact: the true frame is missing), in place.
 
-    A frame flagged as a repeat (``Film.duplicates``) is kept when the targets barely
-    move around it (a car at rest films the same picture twice). Returns the indices
-    blanked.
+    ``Film.duplicates`` lists frames whose picture hardly differs from the one before;
+    on a low-noise film compressed hard, where the car fills a small part of the picture,
+    that includes real frames. So the targets decide: a flagged frame ``i`` is a repeat
+    when they move around it (median over targets of ``min_motion_px`` px a frame or
+    more, from frame ``i - 3`` to ``i + 3``) but not from ``i - 1`` to ``i`` (less than
+    ``still_share`` of that motion: a copy shows them where they were). A car at rest
+    films the same picture twice and is kept, and so is a frame where they moved.
+    Returns the indices blanked.
     """
     dropped = []
     n = tt.uv.shape[0]
-    for i in np.asarray(duplicates, dtype=int):
-        if not 1 <= i < n - 1:
+    flagged = [int(i) for i in np.asarray(duplicates, dtype=int) if 1 <= i < n]
+    for i in flagged:
+        lo, hi = max(i - 3, 0), min(i + 3, n - 1)
+        around = np.hypot(*(tt.uv[hi] - tt.uv[lo]).T) / (hi - lo)
+        here = np.hypot(*(tt.uv[i] - tt.uv[i - 1]).T)
+        ok = np.isfinite(around) & np.isfinite(here)
+        if not ok.any():
             continue
-        step = np.hypot(*(tt.uv[i + 1] - tt.uv[i - 1]).T)
-        if np.nanmedian(step) > min_motion_px if np.isfinite(step).any() else False:
-            tt.uv[i] = np.nan
-            tt.sigma_px[i] = np.nan
-            tt.angle[i] = np.nan
+        motion = float(np.median(around[ok]))
+        if motion >= min_motion_px and float(np.median(here[ok])) < still_share * motion:
             dropped.append(i)
+    for i in dropped:
+        tt.uv[i] = np.nan
+        tt.sigma_px[i] = np.nan
+        tt.angle[i] = np.nan
+    kept = len(flagged) - len(dropped)
     if dropped:
         notes.append(f"frame(s) {_runs_text(np.array(dropped))} repeat the frame before while "
                      "the car moves (re-encoding): not measurements, NaN there; frames "
                      "around a repeat may be a frame off in time")
+    if kept:
+        notes.append(f"{kept} frame(s) that hardly differ from the one before show the targets "
+                     "moved (or a car at rest): kept as measurements")
     return dropped
 
 
