@@ -357,12 +357,15 @@ def refine_symmetric(gray: np.ndarray, centre: np.ndarray, radius: float,
 def refine_centre(gray: np.ndarray, centre: np.ndarray, radius: float,
                   iterations: int = 6) -> np.ndarray:
     """A target's sub-pixel centre, px: ``refine_gradient`` from the start, then
-    ``refine_symmetric`` from there (from the start when the gradients are degenerate or
-    run off, as under strong blur), kept where it stays within ``radius / 4`` and makes the disc more
-    point-symmetric; otherwise the gradient centre (NaNs if neither gives one)."""
+    ``refine_symmetric`` from there (from the start when the gradients ran off, as under
+    strong blur), kept where it stays within ``radius / 4`` and makes the disc more
+    point-symmetric; otherwise the gradient centre. NaNs where the gradients are
+    degenerate (a covered target's flat patch is perfectly point-symmetric: no centre
+    is made of it)."""
     c = refine_gradient(gray, centre, radius, iterations)
-    gradient_ok = bool(np.all(np.isfinite(c)))
-    near = gradient_ok and np.hypot(*(c - centre)) <= 0.3 * radius
+    if not np.all(np.isfinite(c)):
+        return c
+    near = np.hypot(*(c - centre)) <= 0.3 * radius
     start = c if near else np.asarray(centre, dtype=float)
     p = refine_symmetric(gray, start, radius)
     if not np.all(np.isfinite(p)) or np.hypot(*(p - start)) > 0.25 * radius:
