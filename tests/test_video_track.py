@@ -29,7 +29,8 @@ from synth.render import Renderer
 from synth.scene import Effects, Motion, Occluder, Scene, default_camera, default_tapes, \
     default_targets
 from video.targets import detect_targets
-from video.track import track_film, track_targets
+from video.follow import track_targets
+from video.track import track_film
 
 ROOT = Path(__file__).resolve().parents[1]
 V = 15.6  # m/s
@@ -346,7 +347,7 @@ def test_camera_roll_is_taken_out(clean_film):
 
 
 def test_prefetch_keeps_order_and_passes_errors_on():
-    from video.track import prefetch
+    from video.follow import prefetch
 
     frames = [np.full((4, 4), i, np.uint8) for i in range(20)]
     assert [int(f[0, 0]) for f in prefetch(iter(frames), depth=3)] == list(range(20))
@@ -411,7 +412,7 @@ def test_a_target_without_a_velocity_of_its_own_moves_as_its_nearest_neighbour()
     """Target 1 was seen in frame 0 only (a garbled key frame hid it in frame 1): in frame
     4 it is predicted where its neighbour's motion since frame 0 takes it, not where it
     stood (the car moves 3 px a frame; the search grows by 2 px a frame of gap)."""
-    from video.track import _predict
+    from video.follow import _predict
 
     uv = np.full((5, 3, 2), np.nan)
     for i in range(4):

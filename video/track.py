@@ -1,14 +1,14 @@
-"""The video stage: film -> scale -> targets -> tracks -> motion (``track_film``), and
-the frame-to-frame target tracker (``track_targets``).
+"""The video stage: film -> scale -> targets -> tracks -> motion (``track_film``).
 
-Tracking: the targets found in the first frame are followed through the film. Each
-target's position is predicted from its last positions (constant velocity; after a
-gap, from the displacement of the target that moved most like it), the saddle response
-is searched in a window around the prediction, the centre refined
-(``video.targets.refine_centre``: gradient orthogonality, then point symmetry) and the detection checked (radius, contrast,
-quadrant symmetry). A detection that fails the checks is not used: the target is lost
-in that frame (NaN, and a note names the frames), never interpolated. The pattern's
-orientation is unwrapped over frames (hub targets: the wheel's spin angle).
+``track_film`` is a short pipeline over named stages, each a function of this module:
+``_film_rate`` (enough frames, a crash's frame rate), ``_scale`` (the tapes; the lens),
+``_first_targets`` (detection in frame 0), ``_follow`` (``video.follow.track_targets``,
+repeated frames, the lens taken out), ``_roles`` (fixed, hub, body targets; the camera's
+shake taken out on the fixed ones), ``_reference`` (the first frame with every body
+target), ``_cg`` (hub targets, else the vehicle outline), ``_pose`` (the passenger
+cell's x, z, pitch in the car's plane), ``_contact`` (deceleration onset, then the
+contact seen in the picture), ``_speed``, ``_channels`` (displacement from the contact
+frame with sigmas, velocity, crush), ``_wheels`` (spin angles, heights, events).
 
 Example
 -------
@@ -19,381 +19,24 @@ Example
 
 from __future__ import annotations
 
-import queue
-import threading
-from dataclasses import dataclass, field
-from typing import Callable, Iterable, Iterator
+from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from video.contact_seen import NOSE_BAND_M, SeenContact, not_seen, see_contact, settle_contact
 from video.errors import VideoError
 from video.filters import velocity
-from video.targets import (
-    Detections,
-    TargetConfig,
-    centre_sigma,
-    detect_targets,
-    orientation,
-    refine_centre,
-    saddle_response,
-    symmetry_errors,
-    target_radius,
-    to_gray,
-)
+from video.follow import Progress, TargetTracks, TrackerConfig, prefetch, track_targets
+from video.targets import detect_targets
 from video.types import CarGeometry, Tracks
 
-__all__ = ["TrackerConfig", "TargetTracks", "follow_target", "track_targets", "track_film",
-           "prefetch"]
-
-Progress = Callable[[int, int, str], None]
-
-#: Floor of a centre's sigma (drawing, sampling and model errors that noise does not
-#: show), px.
-SIGMA_FLOOR_PX = 0.025
+__all__ = ["TrackerConfig", "track_film"]
 
 #: Lowest frame rate the video stage accepts, frames per second (a crash lasts ~0.1 s).
 MIN_FPS = 200.0
 
 #: SAE J211 class of the velocity channel derived from the film's displacement.
 VELOCITY_CFC = 60
-
-
-@dataclass(frozen=True)
-class TrackerConfig:
-    """Settings of the frame-to-frame tracker.
-
-    Attributes
-    ----------
-    search_px : float
-        Half-width of the search window around the prediction, px (grows by
-        ``search_growth_px`` per frame of a gap).
-    search_growth_px : float
-    max_search_px : float
-    max_point_error : float
-        Largest accepted point-symmetry error within 0.9 of the radius (see
-        ``video.targets.symmetry_errors``): clean, noisy, blurred, compressed or
-        flickering targets stay below 0.02; debris or an occluder over part of a target
-        raises it and shifts its centre (on rendered films, accepted centres stay within
-        0.16 px of the truth with 0.05).
-    max_quarter_error : float
-        Largest accepted quarter-turn anti-symmetry error (motion blur raises it; a blob
-        or a plain corner gives about 1-2).
-    min_contrast_ratio : float
-        Smallest accepted contrast, as a fraction of the target's contrast in the first
-        frame (flicker changes it; an occluder or a smear lowers it more).
-    radius_tolerance : float
-        Largest accepted relative change of the radius.
-    detect : TargetConfig
-        Settings of the first frame's detection.
-    stabilise : bool
-        Take a camera shaken by the impact out of the tracks with the fixed targets
-        (``video.motion.stabilise_on_fixed``); off only to measure what it does.
-    see_contact : bool
-        Look for first contact in the picture, the front end stopping at the barrier
-        (``video.contact_seen``); off only to measure what it does (the deceleration
-        onset alone).
-    """
-
-    search_px: float = 8.0
-    search_growth_px: float = 2.0
-    max_search_px: float = 40.0
-    max_point_error: float = 0.05
-    max_quarter_error: float = 0.3
-    min_contrast_ratio: float = 0.4
-    radius_tolerance: float = 0.25
-    detect: TargetConfig = field(default_factory=TargetConfig)
-    stabilise: bool = True
-    see_contact: bool = True
-
-
-@dataclass(frozen=True)
-class TargetTracks:
-    """Every target followed through the film.
-
-    Attributes
-    ----------
-    uv : (n, K, 2) float
-        Centres, px; NaN where the target was lost.
-    sigma_px : (n, K) float
-        One-sigma uncertainty of each centre per axis, px.
-    angle : (n, K) float
-        Unwrapped pattern orientation, rad (image angle, clockwise positive).
-    radius : (K,) float
-        Radius in the first frame, px.
-    contrast : (K,) float
-        Contrast in the first frame, grey levels of [0, 1].
-    lost : list of (k, first, last)
-        Runs of frames (inclusive) in which target ``k`` was not found.
-    """
-
-    uv: np.ndarray
-    sigma_px: np.ndarray
-    angle: np.ndarray
-    radius: np.ndarray
-    contrast: np.ndarray
-    lost: list
-
-
-def prefetch(frames: Iterable[np.ndarray], depth: int = 4) -> Iterator[np.ndarray]:
-    """Yield the frames of ``frames`` while a background thread decodes the next ones.
-
-    Decoding (OpenCV, which releases the GIL) then overlaps with the tracking of the
-    current frame on a second core. An exception raised while decoding (a damaged frame:
-    VideoError) is raised here, at the frame where it happened.
-    """
-    q: queue.Queue = queue.Queue(maxsize=depth)
-    stop = threading.Event()
-    done = object()
-
-    def work():
-        try:
-            for f in frames:
-                while not stop.is_set():
-                    try:
-                        q.put(f, timeout=0.1)
-                        break
-                    except queue.Full:
-                        continue
-                if stop.is_set():
-                    return
-            q.put(done)
-        except BaseException as err:  # handed to the consumer, re-raised there
-            q.put(err)
-
-    th = threading.Thread(target=work, name="frame-prefetch", daemon=True)
-    th.start()
-    try:
-        while True:
-            item = q.get()
-            if item is done:
-                return
-            if isinstance(item, BaseException):
-                raise item
-            yield item
-    finally:
-        stop.set()
-
-
-def _wrap_half(a: float) -> float:
-    """Wrap an angle difference to (-pi/2, pi/2]."""
-    return float((a + np.pi / 2) % np.pi - np.pi / 2)
-
-
-def follow_target(gray: np.ndarray, pred: np.ndarray, radius: float, contrast: float,
-                  search_px: float, config: TrackerConfig
-                  ) -> tuple[np.ndarray, float, float] | None:
-    """Find one known target near its predicted position.
-
-    Parameters
-    ----------
-    gray : (H, W) float32
-        Frame (or a crop of it around the target), grey levels in [0, 1].
-    pred : (2,) float
-        Predicted centre in ``gray``'s pixel coordinates, px.
-    radius, contrast : float
-        The target's radius (px) and contrast in the first frame.
-    search_px : float
-        Search half-width around ``pred``, px.
-    config : TrackerConfig
-
-    Returns
-    -------
-    (centre (2,) px, contrast now, orientation rad in (-pi/2, pi/2]) or None if the
-    target is not found or fails a check. The prediction itself is refined first; if
-    that fails, candidates are the saddle-response maxima within ``search_px`` of the
-    prediction, nearest first (at most four are checked).
-    """
-    H, W = gray.shape
-    # a good prediction (smooth motion) is refined directly; the search is the fallback
-    got = _check(gray, np.asarray(pred, float), radius, contrast, config)
-    if got is not None and np.hypot(*(got[0] - pred)) < min(search_px, 0.3 * radius):
-        return got[0], got[1], orientation(gray, got[0], radius)
-    half = search_px + 1.2 * radius + 3
-    u0, v0 = int(np.floor(pred[0] - half)), int(np.floor(pred[1] - half))
-    u1, v1 = int(np.ceil(pred[0] + half)) + 1, int(np.ceil(pred[1] + half)) + 1
-    if u1 <= 0 or v1 <= 0 or u0 >= W or v0 >= H:
-        return None
-    u0c, v0c, u1c, v1c = max(u0, 0), max(v0, 0), min(u1, W), min(v1, H)
-    roi = gray[v0c:v1c, u0c:u1c]
-    if roi.shape[0] < 5 or roi.shape[1] < 5:
-        return None
-    resp = saddle_response(roi, max(1.5, min(0.2 * radius, 3.0)))
-    ys = np.arange(v0c, v1c)[:, None]
-    xs = np.arange(u0c, u1c)[None, :]
-    d2 = (xs - pred[0]) ** 2 + (ys - pred[1]) ** 2
-    thr = 0.05 * (contrast / np.pi) ** 2
-    peaks = (resp >= cv2.dilate(resp, np.ones((3, 3), np.uint8))) & (resp > thr) \
-        & (d2 <= search_px**2 + 2)
-    pv, pu = np.nonzero(peaks)
-    order = np.argsort(d2[pv, pu])[:4]
-    for j in order:
-        start = np.array([pu[j] + u0c, pv[j] + v0c], dtype=float)
-        got = _check(gray, start, radius, contrast, config)
-        if got is not None:
-            c, con = got
-            return c, con, orientation(gray, c, radius)
-    return None
-
-
-def _check(gray: np.ndarray, start: np.ndarray, radius: float, contrast: float,
-           config: TrackerConfig) -> np.ndarray | None:
-    """Refine a candidate centre and check it is the target: (centre, contrast) or None."""
-    c = refine_centre(gray, start, radius)
-    if not np.all(np.isfinite(c)) or np.hypot(*(c - start)) > 0.5 * radius:
-        return None
-    r, con = target_radius(gray, c, config.detect, expected=radius)
-    if not np.isfinite(r) or abs(r / radius - 1.0) > config.radius_tolerance:
-        return None
-    if con < config.min_contrast_ratio * contrast:
-        return None
-    e1, e2 = symmetry_errors(gray, c, radius)
-    if e1 > config.max_point_error or e2 > config.max_quarter_error:
-        return None
-    return c, con
-
-
-def _predict(uv: np.ndarray, angle: np.ndarray, i: int, k: int, last: np.ndarray
-             ) -> tuple[np.ndarray, float, int]:
-    """Predicted centre and orientation of target ``k`` in frame ``i``; and the gap
-    (frames since it was last seen).
-
-    Constant velocity from its last two positions; after a gap, the displacement of the
-    target that moved most like it before the gap. A target without a velocity of its
-    own (seen in one frame before a gap, or only in frame 0) moves as the target nearest
-    to it in the picture did since it was last seen (neighbouring targets share the body
-    they are on; a fixed neighbour predicts it standing still, as the fallback does)."""
-    L = last[k]
-    gap = i - L
-    p1 = uv[L, k]
-    a1 = angle[L, k]
-    prev = L - 1
-    if not (prev >= 0 and np.isfinite(uv[prev, k, 0])):
-        return p1 + _neighbour_displacement(uv, i, k, L), a1, gap
-    vel = p1 - uv[prev, k]
-    spin = angle[L, k] - angle[prev, k]
-    if gap > 1:
-        # the target that moved most like this one, seen in L and i - 1
-        best, best_d = None, np.inf
-        for j in range(uv.shape[1]):
-            if j == k or not (np.isfinite(uv[L, j, 0]) and np.isfinite(uv[i - 1, j, 0])):
-                continue
-            if np.isfinite(uv[prev, j, 0]):
-                d = np.hypot(*((uv[L, j] - uv[prev, j]) - vel))
-                if d < best_d:
-                    best, best_d = j, d
-        if best is not None and best_d < 2.0 + 0.2 * np.hypot(*vel):
-            j = best
-            step = uv[i - 1, j] - uv[i - 2, j] if i - 2 >= 0 and np.isfinite(uv[i - 2, j, 0]) else vel
-            return p1 + (uv[i - 1, j] - uv[L, j]) + step, a1 + spin * gap, gap
-    return p1 + vel * gap, a1 + spin * gap, gap
-
-
-def _neighbour_displacement(uv: np.ndarray, i: int, k: int, L: int) -> np.ndarray:
-    """Displacement from frame ``L`` to frame ``i`` of the target nearest to ``k`` in frame
-    ``L`` among those seen in ``L`` and since (in ``i`` itself when it was found there
-    already, else in ``i - 1`` plus its last step), px; zero when there is none."""
-    best, best_d = None, np.inf
-    for j in range(uv.shape[1]):
-        if j == k or not np.isfinite(uv[L, j, 0]):
-            continue
-        if not (np.isfinite(uv[i, j, 0]) or np.isfinite(uv[i - 1, j, 0])):
-            continue
-        d = float(np.hypot(*(uv[L, j] - uv[L, k])))
-        if d < best_d:
-            best, best_d = j, d
-    if best is None:
-        return np.zeros(2)
-    j = best
-    if np.isfinite(uv[i, j, 0]):
-        return uv[i, j] - uv[L, j]
-    step = uv[i - 1, j] - uv[i - 2, j] if i - 2 >= 0 and np.isfinite(uv[i - 2, j, 0]) else 0.0
-    return uv[i - 1, j] - uv[L, j] + step
-
-
-def track_targets(frames: Iterable[np.ndarray], n_frames: int, first: Detections,
-                  noise: np.ndarray | None = None, config: TrackerConfig = TrackerConfig(),
-                  progress: Progress | None = None) -> TargetTracks:
-    """Follow the targets of the first frame through every frame.
-
-    Parameters
-    ----------
-    frames : iterable of (H, W) or (H, W, 3) arrays
-        The film's frames in order, starting with the frame ``first`` was found in.
-    n_frames : int
-        Number of frames (for the arrays and the progress display).
-    first : Detections
-        Targets found in the first frame.
-    noise : (n,) float, optional
-        Image noise of each frame, grey levels of [0, 1] (default: 0.5 / 255).
-    config : TrackerConfig
-    progress : callable, optional
-        ``progress(done, total, stage)``.
-
-    Returns
-    -------
-    TargetTracks
-    """
-    K = len(first)
-    uv = np.full((n_frames, K, 2), np.nan)
-    sig = np.full((n_frames, K), np.nan)
-    ang = np.full((n_frames, K), np.nan)
-    last = np.zeros(K, int)
-    step = max(1, n_frames // 100)
-    unit = np.zeros(K)  # centre sigma per unit of noise and of contrast ratio, px
-    i = -1
-    for i, frame in enumerate(frames):
-        if i >= n_frames:
-            break
-        nz = (0.5 / 255.0) if noise is None else float(noise[i])
-        if i == 0:
-            gray = to_gray(frame)
-            uv[0] = first.centres
-            ang[0] = first.orientations
-            unit = np.array([centre_sigma(gray, c, r, 1.0, floor_px=0.0)
-                             for c, r in zip(first.centres, first.radii)])
-            sig[0] = np.hypot(unit * nz, SIGMA_FLOOR_PX)
-            continue
-        H, W = frame.shape[:2]
-        for k in range(K):
-            pred, a_pred, gap = _predict(uv, ang, i, k, last)
-            if not np.all(np.isfinite(pred)):
-                continue
-            search = min(config.search_px + config.search_growth_px * (gap - 1),
-                         config.max_search_px)
-            R = first.radii[k]
-            half = int(np.ceil(search + 2.2 * R + 8))
-            u0, v0 = max(int(pred[0]) - half, 0), max(int(pred[1]) - half, 0)
-            u1, v1 = min(int(pred[0]) + half + 1, W), min(int(pred[1]) + half + 1, H)
-            if u1 - u0 < 8 or v1 - v0 < 8:
-                continue
-            crop = to_gray(frame[v0:v1, u0:u1])
-            off = np.array([u0, v0], dtype=float)
-            found = follow_target(crop, pred - off, R, first.contrasts[k], search, config)
-            if found is None:
-                continue
-            c, con, a = found
-            uv[i, k] = c + off
-            sig[i, k] = np.hypot(unit[k] * nz * first.contrasts[k] / max(con, 1e-6),
-                                 SIGMA_FLOOR_PX)
-            ang[i, k] = a_pred + _wrap_half(a - a_pred)
-            last[k] = i
-        if progress is not None and (i % step == 0 or i == n_frames - 1):
-            progress(i + 1, n_frames, "tracking")
-    if i + 1 < n_frames:
-        raise VideoError(f"the film gave {i + 1} frames, {n_frames} were expected")
-    lost = []
-    for k in range(K):
-        miss = ~np.isfinite(uv[:, k, 0])
-        d = np.diff(np.concatenate([[0], miss.astype(int), [0]]))
-        for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
-            lost.append((k, int(a), int(b - 1)))
-    return TargetTracks(uv=uv, sigma_px=sig, angle=ang, radius=first.radii.copy(),
-                        contrast=first.contrasts.copy(), lost=lost)
-
-
-# ------------------------------------------------------------------------ pipeline
 
 
 def _runs_text(idx: np.ndarray) -> str:
@@ -564,6 +207,269 @@ def _contact_in_picture(film, frame_t, pose, cg_uv, car: CarGeometry, s: float, 
     return see_contact(film.__getitem__, frame_t, pose, nose, rows, d, onset_s, to_pose=to_pose)
 
 
+# ------------------------------------------------------------------------ stages
+
+
+def _film_rate(film) -> tuple[int, float, str]:
+    """(frames, fps, the film's name); VideoError for a film too short or too slow."""
+    n = int(film.n_frames)
+    fps = float(film.fps)
+    where = getattr(film, "path", "the film")
+    if n < 10:
+        raise VideoError(f"{where} has {n} frames; the video stage needs at least 10 "
+                         "(the approach and the impact)")
+    if not fps >= MIN_FPS:
+        src = getattr(film, "fps_source", "")
+        raise VideoError(f"{where} runs at {fps:g} fps{f' ({src})' if src else ''}; measuring a "
+                         f"crash needs at least {MIN_FPS:g} fps: if it was filmed faster and "
+                         "re-encoded, give the true rate with --fps (e.g. --fps 1000)")
+    return n, fps, where
+
+
+def _scale(frame0, tape_segment_m: float, notes: list):
+    """The tapes' scale estimate (``video.calibrate.measure_scale``): m/px, sigma, lens."""
+    from video.calibrate import measure_scale
+
+    est = measure_scale(frame0, tape_segment_m, frame_index=0)
+    notes.extend(est.notes)
+    return est
+
+
+def _first_targets(frame0, config: TrackerConfig, where: str):
+    """The quadrant targets of frame 0; VideoError when fewer than two."""
+    first = detect_targets(frame0, config.detect)
+    if len(first) < 2:
+        raise VideoError(f"{len(first)} quadrant target(s) found in frame 0 of {where}; at "
+                         "least two on the passenger cell are needed (check the targets are "
+                         f"in view and {2 * config.detect.min_radius_px:g}-{2 * config.detect.max_radius_px:g} px across)")
+    return first
+
+
+def _follow(film, n: int, first, lens, config: TrackerConfig, progress, notes: list):
+    """Every target through the film: (tracks as found, undistorted centres (n, K, 2) px,
+    frames blanked as repeats)."""
+    from video.calibrate import undistort_points
+
+    noise = getattr(film, "noise", None)
+    noise = None if noise is None or len(noise) != n else np.asarray(noise, float) / 255.0
+    tt = track_targets(prefetch(iter(film)), n, first, noise, config, progress)
+    dropped = _drop_repeated_frames(tt, getattr(film, "duplicates", ()), notes)
+    uv = tt.uv.copy()
+    if lens.corrected:
+        flat = uv.reshape(-1, 2)
+        ok = np.isfinite(flat[:, 0])
+        flat[ok] = undistort_points(flat[ok], lens)
+        uv = flat.reshape(uv.shape)
+    return tt, uv, dropped
+
+
+def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list):
+    """Fixed, hub and body targets (``video.motion.classify_targets``) and the camera's
+    shake taken out on the fixed ones: (roles, centres, their sigmas, the correction or
+    None)."""
+    from video.motion import classify_targets, stabilise_on_fixed
+
+    roles = classify_targets(uv, tt.angle)
+    sigma_px = tt.sigma_px
+    fixed = np.flatnonzero(np.array(roles.kind) == "fixed")
+    stab = stabilise_on_fixed(uv, sigma_px, fixed) if config.stabilise else None
+    if stab is not None:
+        uv, sigma_px = stab.uv, stab.sigma_px
+        worst = int(np.nanargmax(np.hypot(*stab.shift_px.T)))
+        unseen = np.flatnonzero(~np.isfinite(stab.shift_px[:, 0]))
+        notes.append(f"camera motion taken out of every track from {len(fixed)} fixed target(s): up to "
+                     f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
+                     f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
+                     + (f"; not corrected in frame(s) {_runs_text(unseen)}, where no fixed target is seen"
+                        if len(unseen) else ""))
+    elif config.stabilise and not len(fixed):
+        notes.append("no fixed target (barrier, floor) in view: a camera shaken by the impact could not be "
+                     "taken out of the tracks")
+    for k in range(uv.shape[1]):
+        miss = np.flatnonzero(~np.isfinite(uv[:, k, 0]))
+        if len(miss):
+            notes.append(f"target{k} ({roles.kind[k]}) lost in {len(miss)} frame(s): "
+                         f"{_runs_text(miss)} (occluded, smeared or out of view): NaN there, "
+                         "not interpolated")
+    notes.append("targets: " + ", ".join(f"target{k}={roles.kind[k]}" for k in range(uv.shape[1])))
+    return roles, uv, sigma_px, stab
+
+
+def _reference(uv, body) -> int:
+    """The first frame where every body target is seen; VideoError when none is."""
+    seen = np.all(np.isfinite(uv[:, body, 0]), axis=1)
+    if not seen.any():
+        raise VideoError("no frame shows every body target at once; cannot set the reference")
+    return int(np.flatnonzero(seen)[0])
+
+
+def _cg(film, uv, tt: TargetTracks, roles, ref: int, car: CarGeometry, s: float, s_sig: float,
+        lens, notes: list):
+    """The CG in the reference frame's image: from the hub targets and the vehicle
+    geometry, else from the fitted outline, else the body targets' centroid. Returns
+    (cg (2,) px, its source or None, the fitted outline or None)."""
+    from video.calibrate import compare_scales, fit_silhouette, undistort_points
+    from video.motion import cg_from_hubs
+
+    d = roles.direction
+    kf, kr = roles.index("front_hub"), roles.index("rear_hub")
+    sil = None
+    try:
+        sil = fit_silhouette(film[ref], car, scale_hint=s, direction=d, frame_index=ref,
+                             inside_px=tt.uv[ref, roles.body])
+        notes.append(compare_scales(s, s_sig, sil).note)
+    except VideoError as err:
+        notes.append(f"silhouette not fitted ({err})")
+    if kf is not None and kr is not None and np.isfinite(uv[ref, kf, 0]) \
+            and np.isfinite(uv[ref, kr, 0]):
+        cg_uv, _ = cg_from_hubs(uv[ref, kf], uv[ref, kr], d, s, car.x_cg - car.rear_axle_x,
+                                car.cg_height - car.wheel_radius)
+        hub_wb = np.hypot(*(uv[ref, kf] - uv[ref, kr])) * s
+        if abs(hub_wb / car.wheelbase - 1.0) > 0.02:
+            notes.append(f"hub targets are {hub_wb:.3f} m apart, the wheelbase is "
+                         f"{car.wheelbase:.3f} m: scale or hub targets doubtful")
+        src = "hub targets and the vehicle geometry"
+    elif sil is not None:
+        p = sil.to_image(np.array([[car.x_cg, car.cg_height]]))[0]
+        cg_uv = undistort_points(p[None], lens)[0] if lens.corrected else p
+        src = "the fitted silhouette"
+    else:
+        cg_uv = uv[ref, roles.body].mean(axis=0)
+        src = None
+        notes.append("CG position unknown (no hub targets, no silhouette): x, z follow the "
+                     "centroid of the body targets")
+    if src:
+        notes.append(f"CG located from {src}")
+    return cg_uv, src, sil
+
+
+@dataclass(frozen=True)
+class _Pose:
+    """The passenger cell in the car's plane, frame by frame (film clock)."""
+
+    pose: object          # video.motion.BodyPose (image px)
+    XZ: np.ndarray        # (n, 2) m from the reference frame, camera roll taken out
+    axes: np.ndarray      # the car plane's axes in the image
+    pitch: np.ndarray     # (n,) rad, nose up positive
+    pos_sig: np.ndarray   # (n,) m, one point's sigma
+    frame_t: np.ndarray   # (n,) s from frame 0
+    onset_guess_s: float  # deceleration onset on the image axes, s from frame 0
+
+
+def _pose(uv, sigma_px, body, cg_uv, ref: int, d: int, s: float, fps: float, notes: list) -> _Pose:
+    """The cell's rigid motion (``video.motion.body_pose``) in the car's plane, the camera's
+    roll found from the level approach and taken out."""
+    from video.motion import body_pose, contact_time, to_car_plane, travel_axes
+
+    n = len(uv)
+    pose = body_pose(uv, sigma_px, body, cg_uv, ref)
+    few = np.flatnonzero(pose.n_targets < 2)
+    if len(few):
+        notes.append(f"fewer than two body targets in frame(s) {_runs_text(few)}: "
+                     "x, z, pitch are NaN there")
+    # camera roll: the car approaches level, so its path before contact is car-plane X
+    # (first guess of the contact from the image axes, then again with the axes found)
+    frame_t = np.arange(n) / fps
+    pos_sig = pose.point_sigma * s
+    XZ = to_car_plane(pose.point - pose.point[ref], d, s)
+    tc0, _ = contact_time(frame_t, XZ[:, 0], pos_sig, fps)
+    axes, roll = travel_axes(pose.point, max(int(tc0 * fps) - 1, 2), d)
+    if abs(roll) > np.radians(0.05):
+        notes.append(f"camera roll {np.degrees(roll):+.2f} deg (from the level approach) "
+                     "taken out of x, z")
+    XZ = to_car_plane(pose.point - pose.point[ref], d, s, axes)
+    return _Pose(pose=pose, XZ=XZ, axes=axes, pitch=d * pose.phi, pos_sig=pos_sig, frame_t=frame_t,
+                 onset_guess_s=float(tc0))
+
+
+def _contact(film, p: _Pose, dropped, cg_uv, cg_src, car, s, d, lens, stab, fps, n,
+             config: TrackerConfig, notes: list):
+    """First contact: the deceleration onset, replaced by the contact seen in the picture
+    when it is seen. Returns (time s from frame 0, its sigma or None, the contact frame,
+    the x series the onset was fitted on)."""
+    from video.motion import contact_time
+
+    # a repeated frame before contact may have shifted the frames after it by one
+    # interval: fit only the frames after the last one
+    x_fit = p.XZ[:, 0].copy()
+    cut = max([i for i in dropped if i < p.onset_guess_s * fps - 3], default=-1)
+    if cut >= 0:
+        x_fit[: cut + 1] = np.nan
+    try:
+        tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps)
+    except VideoError:
+        x_fit = p.XZ[:, 0]
+        tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps)
+    notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
+    seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, car, s, d, tc, lens, stab) \
+        if cg_src and config.see_contact else None
+    tc_sigma = None
+    if seen is not None:
+        tc, tc_sigma, note = settle_contact(tc, seen)
+        notes.append(note)
+    # first frame at or after the contact; a contact within 0.2 frame after a frame is
+    # taken as that frame (the onset fit's precision: frame-aligned contacts stay put)
+    cf = min(max(int(np.ceil(tc * fps - 0.2)), 1), n - 1)
+    notes.append(f"contact frame {cf}")
+    return tc, tc_sigma, cf, x_fit
+
+
+def _speed(p: _Pose, x_fit, cf: int, s: float, s_sig: float, speed_mps, notes: list) -> float:
+    """Impact speed, m/s: the given one, else the approach's (``video.motion.impact_speed``);
+    VideoError when the car moves away from the barrier."""
+    from video.motion import impact_speed
+
+    v_meas, v_sig = impact_speed(p.frame_t, x_fit, p.pos_sig, cf)
+    v_sig = float(np.hypot(v_sig, v_meas * s_sig / s))
+    if v_meas < 0:
+        raise VideoError("the car moves away from the barrier before contact; check the film")
+    if speed_mps is None:
+        return float(v_meas)
+    notes.append(f"impact speed given: {speed_mps:.3f} m/s; measured {v_meas:.3f} "
+                 f"+- {v_sig:.3f} m/s")
+    return float(speed_mps)
+
+
+def _channels(p: _Pose, x_fit, tc: float, cf: int, s: float, s_sig: float, fps: float,
+              car: CarGeometry, notes: list) -> tuple[dict, dict]:
+    """x, z (m from the contact frame), pitch, vx and crush with their sigmas."""
+    from video.motion import crush_from_pose
+
+    XZ, n = p.XZ, len(p.XZ)
+    if not np.all(np.isfinite(XZ[cf])):
+        raise VideoError(f"the car's position is not measured in the contact frame {cf} "
+                         f"(body targets lost there); x, z have no reference")
+    x = XZ[:, 0] - XZ[cf, 0]
+    z = XZ[:, 1] - XZ[cf, 1]
+    sx = np.sqrt(p.pose.point_sigma**2 + p.pose.point_sigma[cf] ** 2) * s
+    sig_x = np.hypot(sx, np.abs(x) * s_sig / s)
+    channels = {"x_m": x, "z_m": z, "pitch_rad": p.pitch}
+    sigma = {"x_m": sig_x, "z_m": np.hypot(sx, np.abs(z) * s_sig / s), "pitch_rad": p.pose.phi_sigma}
+    try:
+        vx = velocity(x, fps, VELOCITY_CFC, sigma_m=sx)
+    except VideoError as err:
+        notes.append(f"no vx_mps: {err}")
+    else:
+        channels["vx_mps"] = vx.values
+        sigma["vx_mps"] = np.hypot(vx.sigma, np.abs(vx.values) * s_sig / s)
+        notes.append(f"vx_mps: derivative of x_m filtered with SAE J211 CFC {vx.cfc}")
+    # crush: the rigid outline past the front end's position at contact, where the CG
+    # was at the contact instant: on the approach line (uniform motion)
+    okp = np.isfinite(x_fit[:cf])
+    if okp.sum() >= 3:
+        line = np.polyfit(p.frame_t[:cf][okp], x_fit[:cf][okp], 1)
+        x_at_tc = float(np.polyval(line, tc) - XZ[cf, 0])
+    else:
+        x_at_tc = 0.0
+    front_ahead = float(np.max(car.silhouette_side[:, 0])) - car.x_cg
+    channels["crush_m"] = crush_from_pose(x, p.pitch, car.silhouette_side, car.x_cg,
+                                          car.cg_height, front_ahead + x_at_tc)
+    sigma["crush_m"] = sig_x.copy()
+    notes.append("crush from the rigid passenger cell's travel past its position at "
+                 "contact (the undeformed outline), not from the deformed front end")
+    return channels, sigma
+
+
 def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
                speed_mps: float | None = None, progress: Progress | None = None,
                config: TrackerConfig = TrackerConfig()) -> Tracks:
@@ -597,229 +503,34 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     VideoError
         No tape, no or too few targets, no contact in the film, ...
     """
-    from video.calibrate import compare_scales, fit_silhouette, measure_scale, undistort_points
-    from video.motion import (
-        body_pose,
-        cg_from_hubs,
-        classify_targets,
-        contact_time,
-        crush_from_pose,
-        impact_speed,
-        stabilise_on_fixed,
-        to_car_plane,
-        travel_axes,
-    )
-
-    n = int(film.n_frames)
-    fps = float(film.fps)
-    where = getattr(film, "path", "the film")
-    if n < 10:
-        raise VideoError(f"{where} has {n} frames; the video stage needs at least 10 "
-                         "(the approach and the impact)")
-    if not fps >= MIN_FPS:
-        src = getattr(film, "fps_source", "")
-        raise VideoError(f"{where} runs at {fps:g} fps{f' ({src})' if src else ''}; measuring a "
-                         f"crash needs at least {MIN_FPS:g} fps: if it was filmed faster and "
-                         "re-encoded, give the true rate with --fps (e.g. --fps 1000)")
+    n, fps, where = _film_rate(film)
     notes: list[str] = list(getattr(film, "notes", []))
     frame0 = film[0]
-
-    # --- scale and lens
     if progress is not None:
         progress(0, n, "calibrating")
-    est = measure_scale(frame0, tape_segment_m, frame_index=0)
-    s, s_sig = est.m_per_px, est.sigma
-    notes.extend(est.notes)
-    lens = est.lens
-
-    # --- targets in the first frame
-    first = detect_targets(frame0, config.detect)
-    if len(first) < 2:
-        raise VideoError(f"{len(first)} quadrant target(s) found in frame 0 of {where}; at "
-                         "least two on the passenger cell are needed (check the targets are "
-                         f"in view and {2 * config.detect.min_radius_px:g}-{2 * config.detect.max_radius_px:g} px across)")
-
-    # --- follow them
-    noise = getattr(film, "noise", None)
-    noise = None if noise is None or len(noise) != n else np.asarray(noise, float) / 255.0
-    tt = track_targets(prefetch(iter(film)), n, first, noise, config, progress)
-    dropped = _drop_repeated_frames(tt, getattr(film, "duplicates", ()), notes)
-    uv = tt.uv.copy()
-    if lens.corrected:
-        flat = uv.reshape(-1, 2)
-        ok = np.isfinite(flat[:, 0])
-        flat[ok] = undistort_points(flat[ok], lens)
-        uv = flat.reshape(uv.shape)
-
-    roles = classify_targets(uv, tt.angle)
+    est = _scale(frame0, tape_segment_m, notes)
+    s, s_sig, lens = est.m_per_px, est.sigma, est.lens
+    first = _first_targets(frame0, config, where)
+    tt, uv, dropped = _follow(film, n, first, lens, config, progress, notes)
+    roles, uv, sigma_px, stab = _roles(uv, tt, config, notes)
     d = roles.direction
-    sigma_px = tt.sigma_px
-    fixed = np.flatnonzero(np.array(roles.kind) == "fixed")
-    stab = stabilise_on_fixed(uv, sigma_px, fixed) if config.stabilise else None
-    if stab is not None:
-        uv, sigma_px = stab.uv, stab.sigma_px
-        worst = int(np.nanargmax(np.hypot(*stab.shift_px.T)))
-        unseen = np.flatnonzero(~np.isfinite(stab.shift_px[:, 0]))
-        notes.append(f"camera motion taken out of every track from {len(fixed)} fixed target(s): up to "
-                     f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
-                     f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
-                     + (f"; not corrected in frame(s) {_runs_text(unseen)}, where no fixed target is seen"
-                        if len(unseen) else ""))
-    elif config.stabilise and not len(fixed):
-        notes.append("no fixed target (barrier, floor) in view: a camera shaken by the impact could not be "
-                     "taken out of the tracks")
-    name = {k: f"target{k}" for k in range(len(first))}
-    for k in range(len(first)):
-        miss = np.flatnonzero(~np.isfinite(uv[:, k, 0]))
-        if len(miss):
-            notes.append(f"{name[k]} ({roles.kind[k]}) lost in {len(miss)} frame(s): "
-                         f"{_runs_text(miss)} (occluded, smeared or out of view): NaN there, "
-                         "not interpolated")
-    notes.append("targets: " + ", ".join(f"{name[k]}={roles.kind[k]}"
-                                         for k in range(len(first))))
-
-    # --- reference frame: the first where every body target is seen
-    body = roles.body
-    seen = np.all(np.isfinite(uv[:, body, 0]), axis=1)
-    ref = int(np.flatnonzero(seen)[0]) if seen.any() else None
-    if ref is None:
-        raise VideoError("no frame shows every body target at once; cannot set the reference")
-
-    # --- the CG in the reference frame's image
-    kf, kr = roles.index("front_hub"), roles.index("rear_hub")
-    sil = None
-    try:
-        sil = fit_silhouette(film[ref], car, scale_hint=s, direction=d, frame_index=ref, inside_px=tt.uv[ref, body])
-        cmp = compare_scales(s, s_sig, sil)
-        notes.append(cmp.note)
-    except VideoError as err:
-        notes.append(f"silhouette not fitted ({err})")
-    if kf is not None and kr is not None and np.isfinite(uv[ref, kf, 0]) \
-            and np.isfinite(uv[ref, kr, 0]):
-        cg_uv, _ = cg_from_hubs(uv[ref, kf], uv[ref, kr], d, s, car.x_cg - car.rear_axle_x,
-                                car.cg_height - car.wheel_radius)
-        hub_wb = np.hypot(*(uv[ref, kf] - uv[ref, kr])) * s
-        if abs(hub_wb / car.wheelbase - 1.0) > 0.02:
-            notes.append(f"hub targets are {hub_wb:.3f} m apart, the wheelbase is "
-                         f"{car.wheelbase:.3f} m: scale or hub targets doubtful")
-        cg_src = "hub targets and the vehicle geometry"
-    elif sil is not None:
-        p = sil.to_image(np.array([[car.x_cg, car.cg_height]]))[0]
-        cg_uv = undistort_points(p[None], lens)[0] if lens.corrected else p
-        cg_src = "the fitted silhouette"
-    else:
-        cg_uv = uv[ref, body].mean(axis=0)
-        cg_src = None
-        notes.append("CG position unknown (no hub targets, no silhouette): x, z follow the "
-                     "centroid of the body targets")
-    if cg_src:
-        notes.append(f"CG located from {cg_src}")
-
-    pose = body_pose(uv, sigma_px, body, cg_uv, ref)
-    few = np.flatnonzero(pose.n_targets < 2)
-    if len(few):
-        notes.append(f"fewer than two body targets in frame(s) {_runs_text(few)}: "
-                     "x, z, pitch are NaN there")
-    # camera roll: the car approaches level, so its path before contact is car-plane X
-    # (first guess of the contact from the image axes, then again with the axes found)
-    frame_t = np.arange(n) / fps
-    pos_sig = pose.point_sigma * s
-    XZ = to_car_plane(pose.point - pose.point[ref], d, s)
-    tc0, _ = contact_time(frame_t, XZ[:, 0], pos_sig, fps)
-    axes, roll = travel_axes(pose.point, max(int(tc0 * fps) - 1, 2), d)
-    if abs(roll) > np.radians(0.05):
-        notes.append(f"camera roll {np.degrees(roll):+.2f} deg (from the level approach) "
-                     "taken out of x, z")
-    XZ = to_car_plane(pose.point - pose.point[ref], d, s, axes)
-    pitch = d * pose.phi
-    pitch_sig = pose.phi_sigma
-
-    # --- contact and impact speed; a repeated frame before contact may have shifted the
-    # frames after it by one interval: fit only the frames after the last one
-    x_fit = XZ[:, 0].copy()
-    cut = max([i for i in dropped if i < tc0 * fps - 3], default=-1)
-    if cut >= 0:
-        x_fit[: cut + 1] = np.nan
-    try:
-        tc, how = contact_time(frame_t, x_fit, pos_sig, fps)
-    except VideoError:
-        x_fit = XZ[:, 0]
-        tc, how = contact_time(frame_t, x_fit, pos_sig, fps)
-    notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
-    seen = _contact_in_picture(film, frame_t, pose, cg_uv, car, s, d, tc, lens, stab) \
-        if cg_src and config.see_contact else None
-    tc_sigma = None
-    if seen is not None:
-        tc, tc_sigma, note = settle_contact(tc, seen)
-        notes.append(note)
-    # first frame at or after the contact; a contact within 0.2 frame after a frame is
-    # taken as that frame (the onset fit's precision: frame-aligned contacts stay put)
-    cf = int(np.ceil(tc * fps - 0.2))
-    cf = min(max(cf, 1), n - 1)
-    notes.append(f"contact frame {cf}")
-    v_meas, v_sig = impact_speed(frame_t, x_fit, pos_sig, cf)
-    v_sig = float(np.hypot(v_sig, v_meas * s_sig / s))
-    if speed_mps is not None:
-        notes.append(f"impact speed given: {speed_mps:.3f} m/s; measured {v_meas:.3f} "
-                     f"+- {v_sig:.3f} m/s")
-        v_imp = float(speed_mps)
-    else:
-        v_imp = v_meas
-    if v_meas < 0:
-        raise VideoError("the car moves away from the barrier before contact; check the film")
-
-    # --- displacement from the contact frame, with sigma
-    if not np.all(np.isfinite(XZ[cf])):
-        raise VideoError(f"the car's position is not measured in the contact frame {cf} "
-                         f"(body targets lost there); x, z have no reference")
+    ref = _reference(uv, roles.body)
+    cg_uv, cg_src, sil = _cg(film, uv, tt, roles, ref, car, s, s_sig, lens, notes)
+    p = _pose(uv, sigma_px, roles.body, cg_uv, ref, d, s, fps, notes)
+    tc, tc_sigma, cf, x_fit = _contact(film, p, dropped, cg_uv, cg_src, car, s, d, lens, stab,
+                                       fps, n, config, notes)
+    v_imp = _speed(p, x_fit, cf, s, s_sig, speed_mps, notes)
+    channels, sigma = _channels(p, x_fit, tc, cf, s, s_sig, fps, car, notes)
     t = (np.arange(n) - cf) / fps
-    x = XZ[:, 0] - XZ[cf, 0]
-    z = XZ[:, 1] - XZ[cf, 1]
-    sx = np.sqrt(pose.point_sigma**2 + pose.point_sigma[cf] ** 2) * s
-    sig_x = np.hypot(sx, np.abs(x) * s_sig / s)
-    sig_z = np.hypot(sx, np.abs(z) * s_sig / s)
-    channels = {"x_m": x, "z_m": z, "pitch_rad": pitch}
-    sigma = {"x_m": sig_x, "z_m": sig_z, "pitch_rad": pitch_sig}
-    try:
-        vx = velocity(x, fps, VELOCITY_CFC, sigma_m=sx)
-    except VideoError as err:
-        notes.append(f"no vx_mps: {err}")
-    else:
-        channels["vx_mps"] = vx.values
-        sigma["vx_mps"] = np.hypot(vx.sigma, np.abs(vx.values) * s_sig / s)
-        notes.append(f"vx_mps: derivative of x_m filtered with SAE J211 CFC {vx.cfc}")
-
-    # --- crush: the rigid outline past the front end's position at contact
-    # where the CG was at the contact instant: on the approach line (uniform motion)
-    okp = np.isfinite(x_fit[:cf])
-    if okp.sum() >= 3:
-        line = np.polyfit(frame_t[:cf][okp], x_fit[:cf][okp], 1)
-        x_at_tc = float(np.polyval(line, tc) - XZ[cf, 0])
-    else:
-        x_at_tc = 0.0
-    front_ahead = float(np.max(car.silhouette_side[:, 0])) - car.x_cg
-    channels["crush_m"] = crush_from_pose(x, pitch, car.silhouette_side, car.x_cg,
-                                          car.cg_height, front_ahead + x_at_tc)
-    sigma["crush_m"] = sig_x.copy()
-    notes.append("crush from the rigid passenger cell's travel past its position at "
-                 "contact (the undeformed outline), not from the deformed front end")
-
-    # --- wheels
-    events = _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, axes, car, channels, sigma,
+    events = _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, p.axes, car, channels, sigma,
                      notes)
-
-    # --- per-target columns
     for k in range(len(first)):
-        channels[f"{name[k]}_u_px"] = tt.uv[:, k, 0]
-        channels[f"{name[k]}_v_px"] = tt.uv[:, k, 1]
-        sigma[f"{name[k]}_u_px"] = tt.sigma_px[:, k]
-        sigma[f"{name[k]}_v_px"] = tt.sigma_px[:, k]
+        for axis, col in (("u", 0), ("v", 1)):
+            channels[f"target{k}_{axis}_px"] = tt.uv[:, k, col]
+            sigma[f"target{k}_{axis}_px"] = tt.sigma_px[:, k]
     for key in channels:
-        bad = ~np.isfinite(channels[key])
-        sigma[key] = np.where(bad, np.nan, sigma[key])
-
-    geometry = _measured_geometry(uv, tt.sigma_px, kf, kr, cf, s, s_sig, sil, car)
-
+        sigma[key] = np.where(~np.isfinite(channels[key]), np.nan, sigma[key])
+    kf, kr = roles.index("front_hub"), roles.index("rear_hub")
     overlay = {
         "frame": ref,
         "tapes": [np.asarray(tp.ends, float) for tp in est.tapes],
@@ -831,6 +542,6 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     }
     return Tracks(t=t, channels=channels, sigma=sigma, events_ms=events, contact_frame=cf,
                   fps=fps, scale_m_per_px=float(s), scale_sigma=float(s_sig),
-                  impact_speed_mps=float(v_imp), direction=int(d), notes=notes,
+                  impact_speed_mps=v_imp, direction=int(d), notes=notes,
                   contact_offset_s=float(tc - cf / fps), contact_sigma_s=tc_sigma, overlay=overlay,
-                  geometry=geometry)
+                  geometry=_measured_geometry(uv, tt.sigma_px, kf, kr, cf, s, s_sig, sil, car))
