@@ -92,12 +92,13 @@ def draw_target(shape, centre, radius, angle, ss=8):
 
 
 def compare_refiners(n: int = 60, seed: int = 0) -> None:
-    """Centre error (px RMS) of the three sub-pixel refiners on random targets of
-    radius 5-20 px, clean and with 5 px motion blur, defocus and noise."""
-    from video.targets import refine_gradient, refine_opencv, refine_saddle
+    """Centre error (px RMS) of the sub-pixel refiners on random targets of radius 5-20 px,
+    clean and with 5 px motion blur, defocus and noise ("centre", the tracker's
+    ``refine_centre``: the gradient one, then point symmetry)."""
+    from video.targets import refine_centre, refine_gradient, refine_opencv, refine_saddle
 
     rng = np.random.default_rng(seed)
-    errs = {name: {"clean": [], "noisy": []} for name in ("gradient", "saddle", "opencv")}
+    errs = {name: {"clean": [], "noisy": []} for name in ("centre", "gradient", "saddle", "opencv")}
     for _ in range(n):
         c = np.array([32.0, 32.0]) + rng.uniform(-0.5, 0.5, 2)
         r = rng.uniform(5.0, 20.0)
@@ -107,8 +108,8 @@ def compare_refiners(n: int = 60, seed: int = 0) -> None:
         noisy = (0.8 * noisy + rng.normal(0, 0.03, img.shape)).astype(np.float32)
         start = c + rng.uniform(-1.0, 1.0, 2)
         for cond, im in (("clean", img), ("noisy", noisy)):
-            for name, f in (("gradient", refine_gradient), ("saddle", refine_saddle),
-                            ("opencv", refine_opencv)):
+            for name, f in (("centre", refine_centre), ("gradient", refine_gradient),
+                            ("saddle", refine_saddle), ("opencv", refine_opencv)):
                 errs[name][cond].append(np.hypot(*(f(im, start, r) - c)))
     for name, e in errs.items():
         print(f"refiner {name:9s} clean {np.sqrt(np.nanmean(np.square(e['clean']))):.3f} px "

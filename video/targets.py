@@ -12,11 +12,14 @@ A quadrant target is a disc split into four quadrants of alternating dark and li
 - **sub-pixel centre**: the point ``c`` that makes the image gradients inside the disc
   orthogonal to ``q - c`` (every gradient of an ideal X-corner points across a line
   through the centre), solved in closed form, re-weighted and iterated
-  (``refine_gradient``, on the image smoothed by ``0.3 * radius``, at most 1.5 px). ``refine_saddle``
-  (stationary point of a quadratic fitted to the smoothed image) and OpenCV's
-  ``cornerSubPix`` are kept for comparison (``benchmarks/bench_video.py``): on targets of
-  radius 5-20 px the three give 0.017 / 0.075 / 0.048 px RMS clean and 0.082 / 0.087 /
-  0.139 px RMS with 5 px motion blur, defocus and noise (3 % of full scale);
+  (``refine_gradient``, on the image smoothed by ``0.3 * radius``, at most 1.5 px), then
+  polished to the disc's best point symmetry, which blur keeps and the gradients'
+  orthogonality does not (``refine_symmetric``; both: ``refine_centre``, what the tracker
+  uses). ``refine_saddle`` (stationary point of a quadratic fitted to the smoothed image)
+  and OpenCV's ``cornerSubPix`` are kept for comparison (``benchmarks/bench_video.py``):
+  on targets of radius 5-20 px, centre / gradient / saddle / OpenCV give 0.012 / 0.017 /
+  0.075 / 0.048 px RMS clean and 0.041 / 0.082 / 0.087 / 0.139 px RMS with 5 px motion
+  blur, defocus and noise (3 % of full scale);
 - **radius and orientation**: on rings around the centre, the second angular harmonic
   ``c2 = sum_j I(theta_j) exp(-2i theta_j)`` of the intensity is large inside the disc and
   small outside (radius), and its phase gives the rotation of the pattern modulo pi
