@@ -730,37 +730,50 @@ def block_time(t: np.ndarray, spin: np.ndarray, spin_sigma: np.ndarray, rolling:
 
     Notes
     -----
-    First guess: the first frame after ``t_from`` where the wheel turns less than a
-    quarter of the rolling rate (over 3 frames). Refined by fitting
-    ``spin = a + k rolling(min(t, tb))`` for ``tb`` on a 0.02-frame grid.
+    Guesses: frames after ``t_from`` where the wheel turns less than a quarter of the
+    rolling rate while rolling would have turned it by at least 8 of the angle's sigmas,
+    over 3 frames, or over 5, 8 or 12 when the car is too slow for that in 3 (a car
+    slowed by the crush, a noisy hub angle). Each guess, earliest first, is refined by
+    fitting ``spin = a + k rolling(min(t, tb))`` for ``tb`` on a 0.02-frame grid and kept
+    when that beats rolling throughout by ``MIN_EVENT_CHI2`` with ``k`` near 1 (so one
+    guess that noise made does not hide a block seen later).
     """
     ok = _finite(spin, rolling, spin_sigma)
     i = np.flatnonzero(ok & (t >= t_from))
     if len(i) < 6:
         return None
-    lag = 3
-    ds = spin[i[lag:]] - spin[i[:-lag]]
-    dr = rolling[i[lag:]] - rolling[i[:-lag]]
-    thr = np.maximum(0.25 * np.abs(dr), 4 * np.median(spin_sigma[ok]))
-    slow = np.flatnonzero((np.abs(ds) < thr) & (np.abs(dr) > 2 * thr))
-    if len(slow) == 0:
-        return None
-    guess = t[i[slow[0]]]
+    noise = 4 * np.median(spin_sigma[ok])
+    guesses: dict = {}  # frame -> the shortest lag that made it a guess
+    for lag in (3, 5, 8, 12):
+        if len(i) <= lag:
+            break
+        ds = spin[i[lag:]] - spin[i[:-lag]]
+        dr = rolling[i[lag:]] - rolling[i[:-lag]]
+        thr = np.maximum(0.25 * np.abs(dr), noise)
+        for j in i[np.flatnonzero((np.abs(ds) < thr) & (np.abs(dr) > 2 * thr))]:
+            guesses.setdefault(int(j), lag)
     dt = 1.0 / fps
-    sel = ok & (t >= guess - 15 * dt) & (t <= guess + 15 * dt)
-    ts, ys, ss = t[sel], spin[sel], spin_sigma[sel]
     tr, rr = t[ok], rolling[ok]
 
     def model(tq, tb):
         return np.stack([np.ones_like(tq), np.interp(np.minimum(tq, tb), tr, rr)], axis=1)
 
-    grid = np.arange(guess - 6 * dt, guess + 4 * dt, 0.02 * dt)
-    tb, chi = kink_time(ts, ys, ss, model, grid)
-    coef, _ = _linear_fit(model(ts, tb), ys, ss)
-    _, chi0 = _linear_fit(model(ts, ts[-1] + 1.0), ys, ss)  # rolling throughout
-    if not (0.5 < coef[1] < 1.5) or chi0 - chi < MIN_EVENT_CHI2:
-        return None
-    return tb
+    tried = -np.inf
+    for j in sorted(guesses):
+        guess = t[j]
+        if guess - tried < 5 * dt:  # a run of guesses is one candidate
+            continue
+        tried = guess
+        lag = guesses[j]  # the stop lies within the lag's frames after the guess
+        sel = ok & (t >= guess - 15 * dt) & (t <= guess + (12 + lag) * dt)
+        ts, ys, ss = t[sel], spin[sel], spin_sigma[sel]
+        grid = np.arange(guess - 6 * dt, guess + (1 + lag) * dt, 0.02 * dt)
+        tb, chi = kink_time(ts, ys, ss, model, grid)
+        coef, _ = _linear_fit(model(ts, tb), ys, ss)
+        _, chi0 = _linear_fit(model(ts, ts[-1] + 1.0), ys, ss)  # rolling throughout
+        if 0.5 < coef[1] < 1.5 and chi0 - chi >= MIN_EVENT_CHI2:
+            return tb
+    return None
 
 
 def unblock_time(t: np.ndarray, spin: np.ndarray, spin_sigma: np.ndarray, rolling: np.ndarray,
