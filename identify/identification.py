@@ -166,6 +166,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         doc["contact_frame"] = int(tracks.contact_frame)
         doc["scale_m_per_px"] = float(tracks.scale_m_per_px)
         doc["scale_std_m_per_px"] = float(tracks.scale_sigma)
+        doc["scale_source"] = str(tracks.scale_source)
         doc["fps"] = float(tracks.fps)
     return doc
 

@@ -33,10 +33,11 @@ def _motion(n_pre, n_post, v=15.0, omega=24.0):
                   front_wheel_angle=roll, rear_wheel_angle=roll)
 
 
-def _film(folder: Path, n_pre=30, n_post=24, targets=True, tapes=True) -> Path:
+def _film(folder: Path, n_pre=30, n_post=24, targets=True, tapes=True, hubs=True) -> Path:
     car = _golf()
     cam = default_camera(car, 2.0, width=1280, height=440, m_per_px=0.004)
-    scene = Scene(car=car, camera=cam, targets=default_targets(car) if targets else (),
+    shown = tuple(t for t in default_targets(car) if hubs or "hub" not in t.kind) if targets else ()
+    scene = Scene(car=car, camera=cam, targets=shown,
                   tapes=default_tapes(car) if tapes else (), x_barrier=2.0)
     write_film(Renderer(scene, _motion(n_pre, n_post)), folder)
     return folder
@@ -116,10 +117,12 @@ def test_film_without_targets(tmp_path, capsys):
     assert not (tmp_path / "res").exists()                    # nothing half-written
 
 
-def test_film_without_tape(tmp_path, capsys):
-    folder = _film(tmp_path / "notape", n_pre=8, n_post=4, tapes=False)
+def test_film_without_tape_or_hub_targets(tmp_path, capsys):
+    # without a tape the scale comes from the hub targets and the wheelbase
+    # (test_video_track); without them too, nothing gives it
+    folder = _film(tmp_path / "notape", n_pre=8, n_post=4, tapes=False, hubs=False)
     code = main(["track", str(folder), "--vehicle", "vw_golf_7", "--fps", "1000", "--quiet"])
-    _one_error_line(capsys, code, "tape")
+    _one_error_line(capsys, code, "no scale reference", "tape", "hub target")
 
 
 def test_tracks_csv_writes_lost_samples_as_nan_and_sigma_columns_after_values():

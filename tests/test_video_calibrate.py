@@ -8,7 +8,7 @@ import pytest
 
 from video.calibrate import (LensDistortion, compare_scales, distort_points, estimate_lens,
                              find_tapes, fit_silhouette, measure_scale, undistort_points)
-from video.errors import VideoError
+from video.errors import NoTapeError, VideoError
 
 SS = 4  # supersampling of the synthetic drawings
 
@@ -89,8 +89,12 @@ def test_two_tapes_in_bgr_frame_are_both_found_and_combined():
     est = measure_scale(img, 0.1)
     assert len(est.tapes) == 2
     assert abs(est.pitch_px / 12.5 - 1) < 0.003
-    # the combined pitch is more precise than either tape alone
-    assert est.pitch_sigma_px <= min(t.pitch_sigma_px for t in est.tapes) * 1.01
+    # the combined pitch is more precise than either tape alone (their own noise: the
+    # camera map's uncertainty, which moves both together, left out)
+    alone = measure_scale(img, 0.1, correct_lens=False, correct_yaw=False)
+    assert alone.pitch_sigma_px <= min(t.pitch_sigma_px for t in alone.tapes) * 1.01
+    # and that uncertainty is counted when the map is estimated
+    assert est.pitch_sigma_px > alone.pitch_sigma_px
 
 
 def test_tape_split_by_a_target_is_measured_as_one():
@@ -149,6 +153,80 @@ def test_undistort_inverts_distort():
     back = undistort_points(distort_points(pts, lens), lens)
     assert np.max(np.abs(back - pts)) < 1e-6
     assert np.max(np.abs(distort_points(pts, lens) - pts)) > 5.0  # it does distort
+
+
+def test_undistort_inverts_distort_with_a_tilt():
+    from dataclasses import replace
+    lens = replace(_lens(-0.12, 1280, 1024, 1500.0), tilt=np.array([3e-5, -1e-5]))
+    pts = np.random.default_rng(2).uniform([0, 0], [1280, 1024], (50, 2))
+    back = undistort_points(distort_points(pts, lens), lens)
+    assert np.max(np.abs(back - pts)) < 1e-6
+    flat = replace(lens, k1=0.0)   # the tilt alone
+    assert np.max(np.abs(undistort_points(distort_points(pts, flat), flat) - pts)) < 1e-9
+    assert np.max(np.abs(undistort_points(pts, flat) - pts)) > 5.0
+
+
+def _receding_tape(tilt_true, n=41, pitch=12.0, u0=-250.0, noise=0.05, seed=0):
+    """Edges of an evenly segmented tape seen through the inverse of ``rectify``: the
+    points a camera yawed by ``tilt_true`` (1/px, along u) records, with edge noise."""
+    from video.calibrate_perspective import unrectify
+    rng = np.random.default_rng(seed)
+    i = np.arange(n)
+    even = np.column_stack([u0 + pitch * i, np.full(n, 40.0)])
+    seen = unrectify(even, np.zeros(2), np.array([tilt_true, 0.0]))
+    return seen + rng.normal(0.0, noise, seen.shape), i
+
+
+def test_camera_yaw_from_the_tapes_uneven_segments():
+    from video.calibrate_perspective import estimate_tilt
+    tilt_true = 3e-5            # 3 degrees at f = 1750 px
+    pulls = []
+    for seed in range(20):
+        pts, i = _receding_tape(tilt_true, seed=seed)
+        yaw = estimate_tilt([(pts, i)], np.zeros(2))
+        assert yaw.tilt[0] == pytest.approx(yaw.along, rel=1e-3) and "taken out" in yaw.note
+        pulls.append((yaw.along - tilt_true) / yaw.sigma)
+    # the sigma is honest: pulls of unit scatter about zero
+    assert abs(np.mean(pulls)) < 0.6 and 0.5 < np.std(pulls) < 1.6
+
+
+def test_an_evenly_spaced_tape_shows_no_yaw():
+    from video.calibrate_perspective import estimate_tilt
+    found = 0
+    for seed in range(20):
+        pts, i = _receding_tape(0.0, seed=seed)
+        yaw = estimate_tilt([(pts, i)], np.zeros(2))
+        found += bool(np.any(yaw.tilt != 0.0))
+        assert np.any(yaw.tilt != 0.0) or "not significant" in yaw.note
+    assert found <= 1              # 3 sigma: about 1 in 370 by chance
+
+
+def test_uneven_spacing_beyond_any_yaw_is_not_taken_for_one():
+    from video.calibrate_perspective import estimate_tilt, unrectify
+    centre = np.array([399.5, 299.5])             # an 800 x 600 picture
+    i = np.arange(31)
+    even = np.column_stack([250.0 + 12.0 * i, np.full(31, 340.0)])
+    for tilt_true, taken in ((5e-5, True), (5e-4, False)):   # 2.5 % and 25 % at the corner
+        seen = unrectify(even, centre, np.array([tilt_true, 0.0]))
+        yaw = estimate_tilt([(seen, i)], centre)
+        assert bool(np.any(yaw.tilt != 0.0)) is taken
+        assert yaw.along == pytest.approx(tilt_true, rel=0.02)
+    assert "more than a yawed camera shows" in yaw.note and not np.isfinite(yaw.sigma)
+
+
+def test_a_k1_beyond_any_crash_cameras_lens_is_not_applied():
+    # lines bent as a lens of k1 = -0.4 at the half-diagonal would (40 % at the corners):
+    # tapes that say so do not show the lens
+    w, h = 800, 600
+    lens = LensDistortion(-0.4, 0.0, 0.0, 0.0, np.array([(w - 1) / 2, (h - 1) / 2]), 500.0, True, 0.0, 0.0, "")
+    u = np.linspace(150, 650, 40)
+    lines = [distort_points(np.column_stack([u, np.full(40, v)]), lens) for v in (120.0, 480.0)]
+    est = estimate_lens(lines, (w, h))
+    assert not est.corrected and est.k1 == 0.0
+    assert "more than 10 %" in est.note
+    mild = LensDistortion(-0.05, 0.0, 0.0, 0.0, lens.centre, 500.0, True, 0.0, 0.0, "")
+    est = estimate_lens([distort_points(np.column_stack([u, np.full(40, v)]), mild) for v in (120.0, 480.0)], (w, h))
+    assert est.corrected and est.k1 == pytest.approx(-0.05, abs=0.005)
 
 
 def test_lens_distortion_estimated_from_tape_straightness():
@@ -223,6 +301,22 @@ def test_scale_and_lens_on_rendered_frame_with_distortion(k1):
     assert abs(est.lens.k1 - k1) < 3 * est.lens.k1_sigma + 0.005
 
 
+@pytest.mark.parametrize("yaw_deg", [2.5, -2.5])
+def test_scale_on_a_rendered_frame_from_a_yawed_camera(yaw_deg):
+    import math
+    from dataclasses import replace
+    from synth.render import Renderer
+    _, car, cam, r = _render(1, 0.1, (1280, 1024), noise=1.0)
+    cam = replace(cam, yaw=math.radians(yaw_deg))
+    r = Renderer(replace(r.scene, camera=cam), r.motion)
+    est = measure_scale(r.render(0), 0.1, focal_px=cam.focal_px)
+    # the tape's segments shrink along it; taken out, its scale is the one on the
+    # camera's axis (a tilt about the image centre keeps the scale there)
+    assert est.lens.corrected and abs(est.lens.tilt[0]) == pytest.approx(
+        math.tan(math.radians(abs(yaw_deg))) / cam.focal_px, rel=0.15)
+    assert abs(est.m_per_px / cam.m_per_px - 1) < 0.003
+
+
 @pytest.mark.parametrize("direction", [1, -1])
 def test_silhouette_fit_on_rendered_frame(direction):
     from synth.scene import body_to_plane, project
@@ -294,3 +388,49 @@ def test_an_outline_drawn_elsewhere_is_not_taken_for_the_car_when_its_targets_ar
     with pytest.raises(VideoError, match="leaves 1 of the 2 body targets outside it"):
         fit_silhouette(img, car, scale_hint=cam.m_per_px, direction=1,
                        inside_px=np.array([centre, centre + [0.0, 0.45 * np.ptp(true_poly[:, 1])]]))
+
+
+def test_the_checker_tape_detector_says_where_and_how_clean():
+    from video.calibrate_tape import CheckerTapeDetector
+    big = _canvas(480, 640, clutter=False)
+    _tape(big, (320.2, 150.6), 0.0, 12.5, 8.0, 30)
+    found = CheckerTapeDetector().detect(_finish(big))
+    assert found.kind == "checker tape" and len(found) == 1
+    # the middle of the measured stretch: the tape's centre, within a segment
+    assert np.hypot(*(found.centres[0] - [320.2, 150.6])) < 12.5
+    assert found.found[0].pitch_px == pytest.approx(12.5, rel=0.003)
+    noisy = CheckerTapeDetector().detect(_finish(big, noise=12.0, seed=4))
+    assert 0 <= noisy.quality[0] < found.quality[0] <= 1
+    assert len(CheckerTapeDetector().detect(_finish(_canvas(120, 160, clutter=False)))) == 0
+
+
+def _frames_with_a_moving_tape(shifts, background_tape=True, car_tape=True):
+    """Frames where a tape on a wall stands still and one on the car moves by ``shifts`` px."""
+    frames = []
+    for k, du in enumerate(shifts):
+        big = _canvas(480, 640, clutter=False)
+        if background_tape:
+            _tape(big, (320.4, 90.3), 0.0, 15.0, 10.0, 36)          # the wall's: 15 px pitch
+        if car_tape:
+            _tape(big, (240.2 + du, 330.6), 0.0, 12.5, 8.0, 20)     # the car's: 12.5 px
+        frames.append(_finish(big, seed=k))
+    return frames
+
+
+def test_a_tape_that_stands_still_while_the_car_moves_is_the_backgrounds():
+    frames = _frames_with_a_moving_tape([0.0, 4.1, 9.3, 13.1])
+    alone = measure_scale(frames[0], 0.1)
+    assert alone.pitch_px == pytest.approx(15.0, rel=0.003)   # the longer chain wins on its own
+    est = measure_scale(frames[0], 0.1, later_frames=frames[1:])
+    assert est.pitch_px == pytest.approx(12.5, rel=0.003)
+    assert any("stand still while the car moves (15.00 px pitch)" in n for n in est.notes)
+    only_wall = _frames_with_a_moving_tape([0.0, 4.1, 9.3, 13.1], car_tape=False)
+    with pytest.raises(NoTapeError, match="no reference tape on the car"):
+        measure_scale(only_wall[0], 0.1, later_frames=only_wall[1:])
+    # a car tape carried by exactly its pattern's period (25 px) in one later frame is
+    # still seen to move in another; and one carried by a sixth of it (less than half its
+    # line changes: a median over the line would say it stood still) is seen to move
+    for shifts in ([0.0, 25.0, 31.2], [0.0, 4.1, 4.2]):
+        frames = _frames_with_a_moving_tape(shifts, background_tape=False)
+        est = measure_scale(frames[0], 0.1, later_frames=frames[1:])
+        assert est.pitch_px == pytest.approx(12.5, rel=0.003) and not any("stand still" in n for n in est.notes)

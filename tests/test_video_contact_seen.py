@@ -248,3 +248,16 @@ def test_points_are_taken_back_to_the_raw_picture_through_a_strong_lens():
     raw = raw_points(to_pose, 0, p)
     assert np.max(np.abs(to_pose(0, raw) - p)) < 0.05
     assert np.max(np.abs(raw - p)) > 15.0  # the lens does move them
+
+
+def test_the_front_end_detector_finds_the_front_or_nothing():
+    from video.contact_seen import FrontEndDetector
+    bg = _background()
+    rows = np.arange(5.0, 55.0)
+    img = _with_car(bg, 101.3)
+    found = FrontEndDetector(bg, rows, 71.3, 116.3, 10.0).detect(img)
+    assert found.kind == "front end" and len(found) == 1
+    assert found.centres[0] == pytest.approx([found.found[0], 29.5])
+    assert found.centres[0, 0] == pytest.approx(101.3, abs=0.5)
+    assert 0.2 <= found.quality[0] <= 1.0
+    assert len(FrontEndDetector(bg, rows, 71.3, 116.3, 10.0).detect(bg)) == 0   # no car

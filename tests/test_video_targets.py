@@ -349,3 +349,24 @@ def test_to_gray_scales_each_integer_depth_to_one_and_averages_three_colours():
 def test_bad_frame_shape_raises_video_error():
     with pytest.raises(VideoError):
         to_gray(np.zeros((2, 3, 4, 5)))
+
+
+def test_the_quadrant_target_detector_says_where_and_how_clean():
+    from video.detector import Detector
+    from video.targets import QuadrantTargetDetector
+    centres = np.array([[60.3, 60.7], [180.2, 70.4]])
+    img = draw_targets((130, 240), centres, [14.0, 14.0], [0.2, 1.0])
+    rng = np.random.default_rng(3)
+    noisy = img.copy()
+    noisy[:, 120:] += rng.normal(0.0, 0.08, noisy[:, 120:].shape)   # the second target under noise
+    det = QuadrantTargetDetector()
+    assert isinstance(det, Detector)
+    found = det.detect(np.clip(noisy, 0, 1))
+    assert found.kind == "quadrant target" and len(found) == 2
+    np.testing.assert_allclose(found.centres, found.found.centres)
+    dist, idx = _match(found.centres, centres)
+    assert np.all(dist < 0.3)
+    q = found.quality[np.argsort(idx)]
+    assert np.all((q >= 0) & (q <= 1))
+    assert q[0] > q[1]          # the clean target is the cleaner find
+    assert len(det.detect(np.full((80, 80), 0.5))) == 0

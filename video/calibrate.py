@@ -8,6 +8,7 @@ Public surface (the modules behind it are ``calibrate_*.py``)::
     pts = undistort_points(uv, est.lens)               # (N, 2) px, before applying est.m_per_px
     sil = fit_silhouette(frame0, car, scale_hint=est.m_per_px)
     cmp = compare_scales(est.m_per_px, est.sigma, sil) # cmp.agree, cmp.note
+    est = scale_from_hubs(spacing_px, sigma_px, wheelbase_m, lens)  # no tape in view
 
 Units: m, px; images are uint8 (H, W) grayscale or (H, W, 3) BGR.
 """
@@ -17,7 +18,8 @@ from .calibrate_lens import (LensDistortion as LensDistortion,
                              estimate_lens as estimate_lens,
                              no_distortion as no_distortion,
                              undistort_points as undistort_points)
-from .calibrate_scale import ScaleEstimate as ScaleEstimate, measure_scale as measure_scale
+from .calibrate_scale import (ScaleEstimate as ScaleEstimate, measure_scale as measure_scale,
+                              scale_from_hubs as scale_from_hubs)
 from .calibrate_silhouette import (ScaleComparison as ScaleComparison,
                                    SilhouetteFit as SilhouetteFit,
                                    compare_scales as compare_scales,
@@ -26,4 +28,4 @@ from .calibrate_tape import Tape as Tape, TapeSearch as TapeSearch, find_tapes a
 
 __all__ = ["LensDistortion", "ScaleComparison", "ScaleEstimate", "SilhouetteFit", "Tape",
            "TapeSearch", "compare_scales", "distort_points", "estimate_lens", "find_tapes",
-           "fit_silhouette", "measure_scale", "no_distortion", "undistort_points"]
+           "fit_silhouette", "measure_scale", "no_distortion", "scale_from_hubs", "undistort_points"]

@@ -15,12 +15,26 @@ applied.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
 
+from .calibrate_perspective import rectify, unrectify
 from .errors import VideoError
+
+
+#: Largest radial distortion a crash camera's lens plausibly has at the image's corners (a
+#: share of the radius): a k1 the tapes say is larger comes from tapes too short or too near
+#: the image centre to show it, not from the lens.
+CORNER_DISTORTION_PLAUSIBLE = 0.10
+
+
+def plausible_k1(radius_px: float, centre: np.ndarray) -> float:
+    """The largest |k1| (for ``radius_px``) that distorts the corners of an image centred at
+    ``centre`` by :data:`CORNER_DISTORTION_PLAUSIBLE`."""
+    corner = float(np.hypot(*(np.asarray(centre, float) + 0.5)))
+    return CORNER_DISTORTION_PLAUSIBLE * (radius_px / corner) ** 2
 
 
 @dataclass(frozen=True)
@@ -41,13 +55,19 @@ class LensDistortion:
     radius_px : float
         Normalising radius, px.
     corrected : bool
-        True if the distortion was significant (|k1| > 3 sigma) and should be removed
-        with :func:`undistort_points`; False means "lens distortion not corrected".
+        True if the distortion (|k1| > 3 sigma) or the tilt is significant and
+        :func:`undistort_points` should be applied; False means "lens distortion not
+        corrected".
     rms_before_px, rms_after_px : float
         RMS distance of the tape points from their straight lines before and after the
         correction (the same when not corrected), px.
     note : str
         One sentence for the user.
+    tilt : (2,) 1/px
+        A camera yawed against the car's plane (:mod:`video.calibrate_perspective`):
+        after the radial terms, :func:`undistort_points` maps a point at ``d`` from
+        ``centre`` to ``centre + d / (1 - tilt . d)``, square to the car's plane. Zero
+        when not measured or not significant.
     """
 
     k1: float
@@ -60,6 +80,7 @@ class LensDistortion:
     rms_before_px: float
     rms_after_px: float
     note: str
+    tilt: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
 
 def no_distortion(image_size: tuple[int, int], note: str,
@@ -94,6 +115,8 @@ def distort_points(points: np.ndarray, lens: LensDistortion) -> np.ndarray:
     (N, 2) px, as recorded by the camera.
     """
     p = np.asarray(points, float)
+    if np.any(lens.tilt != 0.0):
+        p = unrectify(p, lens.centre, lens.tilt)
     d = p - lens.centre
     r2 = np.sum(d ** 2, axis=-1, keepdims=True) / lens.radius_px ** 2
     return lens.centre + d * (1.0 + lens.k1 * r2 + lens.k2 * r2 ** 2)
@@ -111,11 +134,13 @@ def undistort_points(points: np.ndarray, lens: LensDistortion) -> np.ndarray:
     Returns
     -------
     (N, 2) px
-        The points a distortion-free pinhole camera would have recorded.
+        The points a distortion-free pinhole camera would have recorded, square to the
+        car's plane when the lens has a tilt.
     """
     p = np.asarray(points, float)
+    tilted = bool(np.any(lens.tilt != 0.0))
     if lens.k1 == 0.0 and lens.k2 == 0.0:
-        return p.copy()
+        return rectify(p, lens.centre, lens.tilt) if tilted else p.copy()
     d = p - lens.centre
     u = d.copy()
     for _ in range(50):  # fixed point of u = d / (1 + k1 r(u)^2 + k2 r(u)^4)
@@ -129,7 +154,7 @@ def undistort_points(points: np.ndarray, lens: LensDistortion) -> np.ndarray:
             u = nu
             break
         u = nu
-    return lens.centre + u
+    return rectify(lens.centre + u, lens.centre, lens.tilt) if tilted else lens.centre + u
 
 
 def _line_residuals(pts: np.ndarray) -> np.ndarray:
@@ -203,6 +228,12 @@ def estimate_lens(lines: list[np.ndarray], image_size: tuple[int, int], *,
                               "lens distortion not corrected: the tape(s) run too close to "
                               "the image centre or are too short to show it "
                               f"(k1 = {k1:.3g} +- {k1s:.2g})")
+    if abs(k1) > plausible_k1(r0, c):
+        return LensDistortion(0.0, 0.0, k1s, k2s, c, r0, False, rms_b, rms_b,
+                              f"lens distortion not corrected: the tapes' k1 = {k1:.3g} +- {k1s:.2g} "
+                              f"(radius {r0:.0f} px) would distort the corners by more than "
+                              f"{100 * CORNER_DISTORTION_PLAUSIBLE:.0f} %, which a crash camera's lens does not: "
+                              "the tape(s) run too close to the image centre or are too short to show it")
     if abs(k1) <= 3.0 * k1s:
         return LensDistortion(0.0, 0.0, k1s, k2s, c, r0, False, rms_b, rms_b,
                               f"lens distortion not significant (k1 = {k1:.3g} +- {k1s:.2g} "

@@ -359,7 +359,7 @@ def _refine_subpixel(gray: np.ndarray, poly: np.ndarray, origin: np.ndarray, k: 
 
 
 def compare_scales(tape_m_per_px: float, tape_sigma: float,
-                   silhouette: SilhouetteFit) -> ScaleComparison:
+                   silhouette: SilhouetteFit, source: str = "tape") -> ScaleComparison:
     """Compare the tape's scale with the silhouette's (the parallax check).
 
     Parameters
@@ -367,6 +367,9 @@ def compare_scales(tape_m_per_px: float, tape_sigma: float,
     tape_m_per_px, tape_sigma : float
         Tape scale and its one-sigma uncertainty, m/px.
     silhouette : SilhouetteFit
+    source : str
+        What the first scale came from, for the note (``"tape"``, or ``"hub"`` for
+        :func:`video.calibrate_scale.scale_from_hubs`).
 
     Returns
     -------
@@ -380,14 +383,14 @@ def compare_scales(tape_m_per_px: float, tape_sigma: float,
     agree = n_sigma <= 3.0
     t_mm, s_mm = 1e3 * tape_m_per_px, 1e3 * silhouette.m_per_px
     if agree:
-        note = (f"tape and silhouette scales agree: {t_mm:.4f} and {s_mm:.4f} mm/px "
+        note = (f"{source} and silhouette scales agree: {t_mm:.4f} and {s_mm:.4f} mm/px "
                 f"({100 * diff:+.2f} %, {n_sigma:.1f} sigma)")
     else:
-        note = (f"tape and silhouette scales disagree: tape {t_mm:.4f} +- {1e3 * tape_sigma:.4f} "
+        note = (f"{source} and silhouette scales disagree: {source} {t_mm:.4f} +- {1e3 * tape_sigma:.4f} "
                 f"mm/px, silhouette {s_mm:.4f} +- {1e3 * silhouette.sigma:.4f} mm/px "
-                f"({100 * diff:+.2f} %, {n_sigma:.1f} sigma): the tape may not lie in the "
+                f"({100 * diff:+.2f} %, {n_sigma:.1f} sigma): the {source} may not lie in the "
                 "plane of the outline (parallax) or the vehicle outline differs from this "
-                "car; the tape scale is used")
+                f"car; the {source} scale is used")
     return ScaleComparison(float(tape_m_per_px), float(tape_sigma),
                            float(silhouette.m_per_px), float(silhouette.sigma), float(diff),
                            float(n_sigma), bool(agree), note)

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .calibrate_profile import find_edge, line_profile, sample, to_gray
+from .detector import Candidates, Detector
 
 
 @dataclass(frozen=True)
@@ -393,6 +394,27 @@ def _merge(a: Tape, b: Tape) -> Tape | None:
                 edge_points=edge_points,
                 centre_points=np.concatenate([a.centre_points, b.centre_points]),
                 pitch_px=p, pitch_sigma_px=sp, rms_px=rms)
+
+
+class CheckerTapeDetector(Detector):
+    """The reference tapes in a frame (:func:`find_tapes`), as a :class:`video.detector.Detector`.
+
+    ``centres`` are the middles of the tapes' measured stretches; ``quality`` is
+    ``1 - rms_px / QUALITY_RMS_PX``, the edges' scatter about an even pitch against half
+    a pixel (edges that scattered, the pitch barely shows). ``found`` is the list of
+    :class:`Tape`, longest first.
+    """
+
+    kind = "checker tape"
+    QUALITY_RMS_PX = 0.5
+
+    def __init__(self, search: TapeSearch = TapeSearch(), frame_index: int = 0):
+        self.search, self.frame_index = search, frame_index
+
+    def detect(self, frame: np.ndarray) -> Candidates:
+        tapes = find_tapes(frame, frame_index=self.frame_index, search=self.search)
+        return self._candidates([t.ends.mean(axis=0) for t in tapes],
+                                [1.0 - t.rms_px / self.QUALITY_RMS_PX for t in tapes], tapes)
 
 
 def find_tapes(frame: np.ndarray, *, frame_index: int = 0,

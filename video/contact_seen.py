@@ -27,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 
+from .detector import Candidates, Detector
 from .motion import BodyPose
 
 #: The nose's rows: the vehicle outline within this distance of its front-most point, m.
@@ -244,6 +245,31 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
     return u, float(max(spread / np.sqrt(len(found)), FRONT_FLOOR_PX)), len(found)
 
 
+class FrontEndDetector(Detector):
+    """The car's front end in one frame (:func:`front_column`), as a :class:`video.detector.Detector`.
+
+    Set up for one frame's search: the background (the view before the car got there),
+    the nose's rows, the columns from behind the front to ahead of it, the threshold and
+    the camera's shift against the background. One candidate (or none): the front's
+    column at the rows' middle; ``quality`` the share of the rows that showed it;
+    ``found`` is ``(u, sigma, rows_used)`` as :func:`front_column` returns it.
+    """
+
+    kind = "front end"
+
+    def __init__(self, background: np.ndarray, rows: np.ndarray, u_from: float, u_to: float,
+                 threshold: float, bg_shift: np.ndarray | None = None):
+        self.background, self.rows = background, np.asarray(rows, float)
+        self.u_from, self.u_to, self.threshold, self.bg_shift = u_from, u_to, threshold, bg_shift
+
+    def detect(self, frame: np.ndarray) -> Candidates:
+        u, sig, used = front_column(frame, self.background, self.rows, self.u_from, self.u_to,
+                                    self.threshold, self.bg_shift)
+        if not np.isfinite(u):
+            return self._candidates(np.zeros((0, 2)), np.zeros(0), (u, sig, used))
+        return self._candidates([u, float(np.mean(self.rows))], [used / len(self.rows)], (u, sig, used))
+
+
 def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: BodyPose,
                 nose_ref: np.ndarray, rows_ref: tuple[float, float], direction: int,
                 guess_s: float, *, to_pose: Callable[[int, np.ndarray], np.ndarray] | None = None,
@@ -340,9 +366,10 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
                 return not_seen(f"the car's front differs from the background by {level:.1f} grey levels "
                                 f"(noise {noise:.1f}): too little to see it stop")
             threshold = 0.5 * level
-        u, sig, _ = front_column(gray, background, rows, u_from, raw[0] + d * search_px, threshold, shift)
-        if not np.isfinite(u):
+        front = FrontEndDetector(background, rows, u_from, raw[0] + d * search_px, threshold, shift).detect(gray)
+        if not len(front):
             continue
+        u, sig, _ = front.found
         u = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
         u_seen[k], s_seen[k] = u, sig
         last = (int(i), gray, rows, shift, float(nose[1]))
@@ -409,11 +436,11 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
         if not level > CONTRAST_MIN:
             return (f"the car's front differs from the background by {level:.1f} grey levels in frame {i}: "
                     "too little to see it stop")
-        u, _, _ = front_column(gray, background, rows, mid, raw[0] + d * LOCATE_PX, 0.5 * level, shift)
-        if not np.isfinite(u):
+        front = FrontEndDetector(background, rows, mid, raw[0] + d * LOCATE_PX, 0.5 * level, shift).detect(gray)
+        if not len(front):
             return (f"the car's front end not found in frame {i} within {LOCATE_PX:g} px ahead of the "
                     "vehicle outline's nose")
-        return float(to_pose(i, np.array([[u, nose[1]]]))[0, 0] - nose[0])
+        return float(to_pose(i, np.array([[front.found[0], nose[1]]]))[0, 0] - nose[0])
     return (f"the car does not move {2 * search_px + 4:g} px from where it stood in frame 0 within frames "
             f"{idx[0]}-{idx[-1]} around the deceleration onset: no background to see its front against")
 

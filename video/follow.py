@@ -77,6 +77,13 @@ class TrackerConfig:
         Look for first contact in the picture, the front end stopping at the barrier
         (``video.contact_seen``); off only to measure what it does (the deceleration
         onset alone).
+    hub_scale : bool
+        Without a tape in view, take the scale from the hub targets' distance and the
+        vehicle's wheelbase (``video.calibrate.scale_from_hubs``); off only to measure what
+        it does (a film without a tape is then refused).
+    correct_yaw : bool
+        Take a camera yawed against the car's plane out of every point, measured from the
+        tapes' segments (``video.calibrate_perspective``); off only to measure what it does.
     """
 
     search_px: float = 8.0
@@ -89,6 +96,8 @@ class TrackerConfig:
     detect: TargetConfig = field(default_factory=TargetConfig)
     stabilise: bool = True
     see_contact: bool = True
+    hub_scale: bool = True
+    correct_yaw: bool = True
 
 
 @dataclass(frozen=True)

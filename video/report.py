@@ -135,7 +135,7 @@ def write_report(tracks: Tracks, out_dir: str | Path, film=None, car=None) -> Pa
     if cg is not None:
         ax0.plot([cg[0]], [cg[1]], "+", color="red", ms=14, mew=2, label="CG")
     ax0.set_title(f"frame {ov.get('frame', 0)}: scale {tracks.scale_m_per_px * 1e3:.4f} "
-                  f"+- {tracks.scale_sigma * 1e3:.4f} mm/px, contact frame "
+                  f"+- {tracks.scale_sigma * 1e3:.4f} mm/px ({tracks.scale_source}), contact frame "
                   f"{tracks.contact_frame}, impact {tracks.impact_speed_mps:.3f} m/s "
                   f"({tracks.impact_speed_mps * 3.6:.2f} km/h)", fontsize=10)
     ax0.axis("off")

@@ -37,11 +37,13 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
+from video.detector import Candidates, Detector
 from video.errors import VideoError
 
 __all__ = [
     "TargetConfig",
     "Detections",
+    "QuadrantTargetDetector",
     "to_gray",
     "saddle_response",
     "detect_targets",
@@ -599,6 +601,23 @@ def detect_targets(frame: np.ndarray, config: TargetConfig = TargetConfig(),
         contrasts=np.array([found[i][2] for i in order]),
         symmetry=np.array([found[i][3] for i in order]),
     )
+
+
+class QuadrantTargetDetector(Detector):
+    """Quadrant targets in a frame (:func:`detect_targets`), as a :class:`video.detector.Detector`.
+
+    ``quality`` is ``1 - symmetry / config.max_symmetry_error``: 1 for a perfect quadrant
+    pattern, 0 for one at the edge of acceptance. ``found`` is the :class:`Detections`.
+    """
+
+    kind = "quadrant target"
+
+    def __init__(self, config: TargetConfig = TargetConfig(), roi: tuple[int, int, int, int] | None = None):
+        self.config, self.roi = config, roi
+
+    def detect(self, frame: np.ndarray) -> Candidates:
+        det = detect_targets(frame, self.config, self.roi)
+        return self._candidates(det.centres, 1.0 - det.symmetry / self.config.max_symmetry_error, det)
 
 
 def _empty() -> Detections:

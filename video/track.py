@@ -1,7 +1,8 @@
 """The video stage: film -> scale -> targets -> tracks -> motion (``track_film``).
 
 ``track_film`` is a short pipeline over named stages, each a function of this module:
-``_film_rate`` (enough frames, a crash's frame rate), ``_scale`` (the tapes; the lens),
+``_film_rate`` (enough frames, a crash's frame rate), ``_scale`` (the tapes; the lens;
+without a tape, ``_scale_from_hubs`` after the roles: the hub targets and the wheelbase),
 ``_first_targets`` (detection in frame 0), ``_follow`` (``video.follow.track_targets``,
 repeated frames, the lens taken out), ``_roles`` (fixed, hub, body targets; the camera's
 shake taken out on the fixed ones), ``_reference`` (the first frame with every body
@@ -24,16 +25,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from video.contact_seen import NOSE_BAND_M, SeenContact, not_seen, see_contact, settle_contact
-from video.errors import VideoError
+from video.errors import NoTapeError, VideoError
 from video.filters import velocity
 from video.follow import Progress, TargetTracks, TrackerConfig, prefetch, track_targets
-from video.targets import detect_targets
+from video.targets import QuadrantTargetDetector
 from video.types import CarGeometry, Tracks
 
 __all__ = ["TrackerConfig", "track_film"]
 
 #: Lowest frame rate the video stage accepts, frames per second (a crash lasts ~0.1 s).
 MIN_FPS = 200.0
+
+#: How far into the film the frames lie that tell the car's tapes from the background's
+#: patterns (they moved with the car by then: 10 ms at 15 m/s is 0.15 m), s; the second
+#: and third 1.3 and 1.7 times as far (:func:`video.calibrate_scale.tapes_on_the_car`).
+LATER_S = 0.010
 
 #: SAE J211 class of the velocity channel derived from the film's displacement.
 VELOCITY_CFC = 60
@@ -156,7 +162,7 @@ def _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, axes, car, channels, si
     return events
 
 
-def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car) -> dict:
+def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car, hubs_measure: bool = True) -> dict:
     """The car's wheelbase and length as the film shows them (``Tracks.geometry``).
 
     Wheelbase: the median distance of the two hub targets over the frames before contact
@@ -164,9 +170,10 @@ def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car) -> dict:
     sigmas (tracking errors of neighbouring frames are alike, so averaging is not credited)
     with the scale's. Length: the fitted silhouette is the vehicle file's outline scaled
     to the film's edges, so the film's length is the file's times tape scale over
-    silhouette scale, with both scales' sigmas."""
+    silhouette scale, with both scales' sigmas. ``hubs_measure`` False: the scale came from
+    the hub targets and the file's wheelbase, so their spacing measures nothing (absent)."""
     out: dict = {}
-    if kf is not None and kr is not None:
+    if hubs_measure and kf is not None and kr is not None:
         pre = np.zeros(len(uv), bool)
         pre[:max(int(cf), 1)] = True
         both = pre & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
@@ -226,18 +233,73 @@ def _film_rate(film) -> tuple[int, float, str]:
     return n, fps, where
 
 
-def _scale(frame0, tape_segment_m: float, notes: list):
-    """The tapes' scale estimate (``video.calibrate.measure_scale``): m/px, sigma, lens."""
+def _scale(frame0, later, tape_segment_m: float, notes: list, config: TrackerConfig):
+    """The tapes' scale estimate (``video.calibrate.measure_scale``): m/px, sigma, lens and
+    camera yaw, from the tapes that moved by the ``later`` frames (on the car); None when no
+    tape is in view (the scale then comes from the hub targets, ``_scale_from_hubs``, unless
+    ``config.hub_scale`` is off: then the NoTapeError)."""
     from video.calibrate import measure_scale
 
-    est = measure_scale(frame0, tape_segment_m, frame_index=0)
+    try:
+        est = measure_scale(frame0, tape_segment_m, frame_index=0, correct_yaw=config.correct_yaw,
+                            later_frames=later)
+    except NoTapeError as err:
+        if not config.hub_scale:
+            raise
+        notes.append(f"{err}: the scale is taken from the hub targets and the wheelbase instead")
+        return None
     notes.extend(est.notes)
+    return est
+
+
+def _no_lens(frame0):
+    """The lens model of a film without a tape: nothing corrected, and why."""
+    from video.calibrate import no_distortion
+
+    h, w = np.asarray(frame0).shape[:2]
+    return no_distortion((w, h), "lens distortion and camera yaw not measured (no tape in view, whose "
+                                 "straightness and even segments measure them): not corrected")
+
+
+def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry, lens, where: str,
+                     notes: list):
+    """The scale of a film without a tape (``video.calibrate.scale_from_hubs``): the hub
+    targets' median distance over the approach, before the body targets' deceleration onset
+    (the wheelbase is not crushed yet), against the vehicle file's wheelbase. VideoError
+    when the film has no front and rear hub target: then it has no scale reference."""
+    from video.calibrate import scale_from_hubs
+    from video.motion import body_pose, contact_time
+
+    kf, kr = roles.index("front_hub"), roles.index("rear_hub")
+    if kf is None or kr is None:
+        raise VideoError(f"no scale reference in {where}: no checker tape in frame 0 and no "
+                         f"{'front' if kf is None else 'rear'} hub target to take the scale from the "
+                         "wheelbase; film a tape in the car's plane or targets on both hubs")
+    # the approach: before the deceleration onset of the body targets' motion, in px
+    pose = body_pose(uv, sigma_px, roles.body, uv[ref, roles.body].mean(axis=0), ref)
+    frame_t = np.arange(len(uv)) / fps
+    x_px = roles.direction * (pose.point[:, 0] - pose.point[ref, 0])
+    onset, _ = contact_time(frame_t, x_px, pose.point_sigma, fps)
+    before = np.zeros(len(uv), bool)
+    before[:max(int(onset * fps) - 2, 3)] = True
+    both = before & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
+    if both.sum() < 3:
+        raise VideoError(f"no scale reference in {where}: no checker tape in frame 0, and the hub "
+                         f"targets are seen together in {int(both.sum())} frame(s) before contact "
+                         "(3 needed to take the scale from the wheelbase)")
+    spacing = np.hypot(*(uv[both, kf] - uv[both, kr]).T)
+    # one frame's sigma: tracking errors of neighbouring frames are alike, so the median
+    # over the approach is not credited with averaging them out
+    sig = float(np.nanmedian(np.hypot(sigma_px[both, kf], sigma_px[both, kr])))
+    est = scale_from_hubs(float(np.median(spacing)), sig if np.isfinite(sig) else 0.0,
+                          float(car.wheelbase), lens)
+    notes.extend(est.notes + (lens.note,))
     return est
 
 
 def _first_targets(frame0, config: TrackerConfig, where: str):
     """The quadrant targets of frame 0; VideoError when fewer than two."""
-    first = detect_targets(frame0, config.detect)
+    first = QuadrantTargetDetector(config.detect).detect(frame0).found
     if len(first) < 2:
         raise VideoError(f"{len(first)} quadrant target(s) found in frame 0 of {where}; at "
                          "least two on the passenger cell are needed (check the targets are "
@@ -303,8 +365,7 @@ def _reference(uv, body) -> int:
     return int(np.flatnonzero(seen)[0])
 
 
-def _cg(film, uv, tt: TargetTracks, roles, ref: int, car: CarGeometry, s: float, s_sig: float,
-        lens, notes: list):
+def _cg(film, uv, tt: TargetTracks, roles, ref: int, car: CarGeometry, est, notes: list):
     """The CG in the reference frame's image: from the hub targets and the vehicle
     geometry, else from the fitted outline, else the body targets' centroid. Returns
     (cg (2,) px, its source or None, the fitted outline or None)."""
@@ -312,12 +373,13 @@ def _cg(film, uv, tt: TargetTracks, roles, ref: int, car: CarGeometry, s: float,
     from video.motion import cg_from_hubs
 
     d = roles.direction
+    s, lens = est.m_per_px, est.lens
     kf, kr = roles.index("front_hub"), roles.index("rear_hub")
     sil = None
     try:
         sil = fit_silhouette(film[ref], car, scale_hint=s, direction=d, frame_index=ref,
                              inside_px=tt.uv[ref, roles.body])
-        notes.append(compare_scales(s, s_sig, sil).note)
+        notes.append(compare_scales(s, est.sigma, sil, "tape" if est.tapes else "hub").note)
     except VideoError as err:
         notes.append(f"silhouette not fitted ({err})")
     if kf is not None and kr is not None and np.isfinite(uv[ref, kf, 0]) \
@@ -325,7 +387,7 @@ def _cg(film, uv, tt: TargetTracks, roles, ref: int, car: CarGeometry, s: float,
         cg_uv, _ = cg_from_hubs(uv[ref, kf], uv[ref, kr], d, s, car.x_cg - car.rear_axle_x,
                                 car.cg_height - car.wheel_radius)
         hub_wb = np.hypot(*(uv[ref, kf] - uv[ref, kr])) * s
-        if abs(hub_wb / car.wheelbase - 1.0) > 0.02:
+        if est.tapes and abs(hub_wb / car.wheelbase - 1.0) > 0.02:
             notes.append(f"hub targets are {hub_wb:.3f} m apart, the wheelbase is "
                          f"{car.wheelbase:.3f} m: scale or hub targets doubtful")
         src = "hub targets and the vehicle geometry"
@@ -508,14 +570,19 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     frame0 = film[0]
     if progress is not None:
         progress(0, n, "calibrating")
-    est = _scale(frame0, tape_segment_m, notes)
-    s, s_sig, lens = est.m_per_px, est.sigma, est.lens
+    later = [film[min(max(int(s * fps), k), n - 1)] for s, k in ((LATER_S, 5), (1.3 * LATER_S, 7),
+                                                                 (1.7 * LATER_S, 9))]
+    est = _scale(frame0, later, tape_segment_m, notes, config)
+    lens = est.lens if est is not None else _no_lens(frame0)
     first = _first_targets(frame0, config, where)
     tt, uv, dropped = _follow(film, n, first, lens, config, progress, notes)
     roles, uv, sigma_px, stab = _roles(uv, tt, config, notes)
     d = roles.direction
     ref = _reference(uv, roles.body)
-    cg_uv, cg_src, sil = _cg(film, uv, tt, roles, ref, car, s, s_sig, lens, notes)
+    if est is None:
+        est = _scale_from_hubs(uv, sigma_px, roles, ref, fps, car, lens, where, notes)
+    s, s_sig = est.m_per_px, est.sigma
+    cg_uv, cg_src, sil = _cg(film, uv, tt, roles, ref, car, est, notes)
     p = _pose(uv, sigma_px, roles.body, cg_uv, ref, d, s, fps, notes)
     tc, tc_sigma, cf, x_fit = _contact(film, p, dropped, cg_uv, cg_src, car, s, d, lens, stab,
                                        fps, n, config, notes)
@@ -544,4 +611,6 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
                   fps=fps, scale_m_per_px=float(s), scale_sigma=float(s_sig),
                   impact_speed_mps=v_imp, direction=int(d), notes=notes,
                   contact_offset_s=float(tc - cf / fps), contact_sigma_s=tc_sigma, overlay=overlay,
-                  geometry=_measured_geometry(uv, tt.sigma_px, kf, kr, cf, s, s_sig, sil, car))
+                  geometry=_measured_geometry(uv, tt.sigma_px, kf, kr, cf, s, s_sig, sil, car,
+                                              hubs_measure=bool(est.tapes)),
+                  scale_source=est.source)

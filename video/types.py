@@ -98,6 +98,10 @@ class Tracks:
         ``hub_spacing_sigma_m`` (the hub targets' distance before contact: the
         wheelbase), ``outline_length_m`` and ``outline_length_sigma_m`` (the fitted
         silhouette's length). A key is absent when not measured.
+    scale_source : str
+        What ``scale_m_per_px`` was taken from: ``"checker tape"``, or ``"hub targets and
+        wheelbase"`` when no tape was in view (the vehicle file's wheelbase then set the
+        scale, so ``hub_spacing_m`` is absent: it would check the file against itself).
     """
 
     t: np.ndarray
@@ -115,6 +119,7 @@ class Tracks:
     contact_sigma_s: float | None = None
     overlay: dict = field(default_factory=dict)
     geometry: dict = field(default_factory=dict)
+    scale_source: str = "checker tape"
 
     @property
     def contact_time_s(self) -> float:

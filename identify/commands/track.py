@@ -121,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {out / 'tracks.csv'} and {out / 'tracking_report.png'}", file=sys.stderr)
         print(f"contact frame {tracks.contact_frame}, impact speed "
               f"{tracks.impact_speed_mps * 3.6:.2f} km/h, scale "
-              f"{tracks.scale_m_per_px * 1e3:.4f} mm/px", file=sys.stderr)
+              f"{tracks.scale_m_per_px * 1e3:.4f} mm/px (from the {tracks.scale_source})", file=sys.stderr)
         if tracks.events_ms:
             print("events: " + ", ".join(f"{k} {v:.1f} ms" for k, v in tracks.events_ms.items()
                                          if v is not None), file=sys.stderr)
