@@ -488,3 +488,29 @@ def test_a_target_without_a_velocity_of_its_own_moves_as_its_nearest_neighbour()
     uv[4, 0] = [112.5, 50.0]                    # found in this frame already: its own step
     pred, _, _ = _predict(uv, angle, 4, 1, last)
     np.testing.assert_allclose(pred, [122.5, 60.0])
+
+
+@pytest.mark.parametrize("roll_deg", [0.0, 3.0, -3.0])
+def test_the_nose_is_placed_along_the_car_planes_axes(roll_deg):
+    from video.contact_seen import NOSE_BAND_M
+    from video.motion import travel_axes
+    from video.track import nose_in_picture
+
+    car = car_geometry(tomllib.loads((ROOT / "data" / "vehicles" / "audi_a4.toml").read_text()))
+    s, d, cg = 0.005, 1, np.array([600.0, 400.0])
+    # the approach in a camera rolled by roll_deg: the axes from the CG's path
+    r = np.radians(roll_deg)
+    path = cg + np.outer(np.arange(-40.0, 0.0), [np.cos(r), np.sin(r)]) * 10.0
+    axes, _ = travel_axes(path, len(path), d)
+    nose, (top, bottom), row_lag_px = nose_in_picture(car, cg, axes, s)
+    sil = np.asarray(car.silhouette_side)
+    tip = sil[np.argmax(sil[:, 0])]
+    # where the tip stands in the picture: the CG plus the tip's car-plane offset, rotated
+    ahead, up = (tip[0] - car.x_cg) / s, (tip[1] - car.cg_height) / s
+    tip_uv = cg + ahead * np.array([np.cos(r), np.sin(r)]) + up * np.array([np.sin(r), -np.cos(r)])
+    assert top - 1.0 <= tip_uv[1] <= bottom + 1.0
+    assert row_lag_px(np.array([tip_uv[1]]))[0] == pytest.approx(0.0, abs=0.6)
+    # the band's rows stand within NOSE_BAND_M of the tip, and its ends at about that
+    lags = row_lag_px(np.arange(np.ceil(top + 1.0), bottom - 1.0))
+    assert np.nanmax(lags) <= NOSE_BAND_M / s + 1.0
+    assert abs(nose[0] - tip_uv[0]) < 0.5 * (bottom - top) * abs(np.sin(r)) + NOSE_BAND_M / s

@@ -6,7 +6,9 @@ cell goes on: the visible front end stops in the image, sharply (at 15 m/s it mo
 frame at 1000 fps, then not at all), long before the cell's deceleration rises out of the
 noise (a force growing with the crush moves the cell by less than 1 mm in the first 5-8 ms).
 The contact is the instant at which the front end carried rigidly with the cell reaches the
-column where the visible front end stands after the stop (:func:`stop_time`).
+column where the visible front end stands after the stop (:func:`stop_time`), taken back to
+the nose's tip where the rows that show the front stand behind it (a rounded nose, a lower
+bumper as grey as the floor: :func:`back_to_the_tip`).
 
 Both are measured in the car's own plane, whatever the barrier's depth. The barrier's edge
 in the picture is not the face: a barrier side face 0.6 m nearer the camera than the car's
@@ -34,6 +36,14 @@ from .motion import BodyPose
 NOSE_BAND_M = 0.03
 #: Samples (0.5 px; 6 px) of background that end the car's run of columns in a row.
 GAP_SAMPLES = 12
+#: Samples behind the car's last sample above the threshold whose median is the car's grey
+#: at the front (0.5 px each: 1 to 5 px behind it)
+COVER_BEHIND = (2, 10)
+#: Told apart by the grey (``min_contrast``), the car's run ends at this many samples (0.5 px)
+#: without the car, of which END_TOLD are told background: debris a few px ahead of the
+#: front is not joined to it, and background as grey as the car does not end it
+END_SAMPLES = 6
+END_TOLD = 4
 #: Floor of a front column's one-sigma, px (compression blocks, the rows' quantile).
 FRONT_FLOOR_PX = 0.3
 #: Which of the rows' front columns stands for the front end (quantile in the travel direction).
@@ -62,6 +72,10 @@ CONTRAST_MIN = 6.0
 #: seen, and 2 frames (+4 ms, debris at the face) on both at 500 fps (seeds 960000-960029,
 #: which no test and no benchmark scores).
 SEEN_FLOOR_FRAMES = 1.0
+#: One-sigma of the time from the nose's tip reaching the face to the seen rows reaching
+#: it, as a share of that time (the vehicle file's outline near the nose is known to a few
+#: mm, and the car's speed over that time to a few per cent)
+TIP_LAG_REL_SIGMA = 0.25
 #: Fixed-point steps inverting the lens's and shake's correction (each shrinks the error
 #: by the correction's relative change across it, 0.1 or less)
 TO_RAW_STEPS = 4
@@ -182,14 +196,17 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
 
 
 def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_from: float,
-                 u_to: float, threshold: float, bg_shift: np.ndarray | None = None) -> tuple[float, float, int]:
+                 u_to: float, threshold: float, bg_shift: np.ndarray | None = None,
+                 min_contrast: float | None = None) -> tuple[float, float, np.ndarray]:
     """The car's front column in a band of rows: where it stops differing from the background.
 
     In each row that starts on the car at ``u_from`` (behind the front), the end of the
     run of columns towards ``u_to`` (ahead) whose difference from the background exceeds
-    ``threshold`` (it ends where :data:`GAP_SAMPLES` samples in a row do not), refined to
-    where the difference crosses it (linear between the two pixels); then the rows'
-    :data:`FORWARD_QUANTILE` in the direction of travel (the nose's most forward rows).
+    ``threshold`` (it ends where :data:`GAP_SAMPLES` samples in a row do not; with
+    ``min_contrast``, where :data:`END_SAMPLES` do, and it goes on over background of
+    another grey, :func:`_run_on`), refined to where the car covers half a pixel
+    (:func:`_half_covered`); then the rows' :data:`FORWARD_QUANTILE` in the direction of
+    travel (the nose's most forward rows).
 
     Parameters
     ----------
@@ -203,12 +220,16 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
         Grey levels: half the car's own difference from the background.
     bg_shift : (2,) px, optional
         The camera's image shift of ``gray`` relative to ``background``.
+    min_contrast : float, optional
+        Grey levels: the least difference between the car and the background at which
+        a sample is told one or the other; with it the run goes on past the threshold's
+        end over background of another grey (:func:`_run_on`).
 
     Returns
     -------
-    (u, sigma, rows_used)
+    (u, sigma, front_rows)
         The column px (NaN when fewer than three rows show the front), its one-sigma from
-        the rows' scatter (at least 0.1 px), and how many rows showed it.
+        the rows' scatter (at least 0.1 px), and the rows that showed it (px).
     """
     from .calibrate_profile import sample
 
@@ -216,33 +237,111 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
     us = np.arange(u_from, u_to + step / 2, step)
     grid = _band(us, rows)
     shift = np.zeros(2) if bg_shift is None else np.asarray(bg_shift, float)
-    diff = np.abs(sample(gray, grid) - sample(background, grid - shift))
+    seen, behind = sample(gray, grid), sample(background, grid - shift)
+    diff = np.abs(seen - behind)
     above = np.nan_to_num(diff, nan=0.0) > threshold
     # the car's region runs on from ``u_from`` until the background shows for GAP samples
-    # (debris or a changed patch of background further ahead are not the car)
-    gap = np.ones(GAP_SAMPLES, int)
-    found = []
+    # (debris or a changed patch of background further ahead are not the car); a sample
+    # of background as grey as the car there is neither, and does not end it
+    gap, end = np.ones(GAP_SAMPLES, int), np.ones(END_SAMPLES, int)
+    found, front_rows = [], []
     for r in range(len(rows)):
         if not above[r, 0]:
             continue
-        runs = np.convolve((~above[r]).astype(int), gap, mode="valid") == GAP_SAMPLES
-        starts = np.flatnonzero(runs)
+        window = gap if min_contrast is None else end
+        starts = np.flatnonzero(np.convolve((~above[r]).astype(int), window, mode="valid") == len(window))
         if len(starts) == 0:
             continue
         j = starts[0] - 1  # the car's last sample above the threshold
+        if min_contrast is not None:
+            j = _run_on(seen[r], behind[r], j, min_contrast)
+            if j is None:
+                continue  # the row goes on over background as grey as the car: its front unseen
         if not np.all(np.isfinite(diff[r, max(j, 0):j + GAP_SAMPLES + 1])):
             continue  # the run ends at the picture's border, not at the car's front
-        a, b = diff[r, j], diff[r, j + 1]
-        frac = (a - threshold) / (a - b) if a > b else 0.5
-        found.append(us[j] + step * frac)
+        edge = _half_covered(seen[r], behind[r], j, threshold if min_contrast is None else min_contrast)
+        if edge is None and min_contrast is not None:
+            continue  # the front stands on background as grey as the car: not seen in this row
+        if edge is None:  # no car grey to measure the cover with: the fixed threshold
+            a, b = diff[r, j], diff[r, j + 1]
+            edge = j + ((a - threshold) / (a - b) if a > b else 0.5)
+        found.append(us[0] + step * edge)
+        front_rows.append(rows[r])
+    front_rows = np.asarray(front_rows, float)
     if len(found) < 3:
-        return float("nan"), float("nan"), len(found)
+        return float("nan"), float("nan"), front_rows
     found = np.asarray(found)
     # the nose's most forward rows touch first; the rows behind them go on until they
     # reach the face too, so the rows' median would stop late
     u = float(np.quantile(found * step, FORWARD_QUANTILE) / step)
     spread = 1.4826 * float(np.median(np.abs(found - np.median(found))))
-    return u, float(max(spread / np.sqrt(len(found)), FRONT_FLOOR_PX)), len(found)
+    return u, float(max(spread / np.sqrt(len(found)), FRONT_FLOOR_PX)), front_rows
+
+
+def _run_on(seen: np.ndarray, behind: np.ndarray, j: int, min_contrast: float) -> int | None:
+    """The car's last sample along one row, from ``j`` (the end of its run above a fixed
+    threshold) on, told from the background sample by sample by its grey.
+
+    The fixed threshold is half the car's difference from the background just behind its
+    front. Ahead of it the background may change (a wall, then the barrier it passes in
+    front of), and where the car differs from it by less than the threshold the car's
+    run seems to end though the car goes on. Here a sample is the car's where it is
+    nearer the car's grey (measured just behind ``j``) than the background's, told only
+    where the two differ by ``min_contrast``; samples where they do not are neither and
+    do not end the run, which ends at :data:`END_SAMPLES` samples without the car of
+    which :data:`END_TOLD` are told background. None when it never ends.
+    """
+    car = _car_grey(seen, j)
+    if car is None:
+        return j
+    contrast = car - behind[j:]
+    told = np.nan_to_num(np.abs(contrast), nan=0.0) > min_contrast
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cover = np.where(told, (seen[j:] - behind[j:]) / contrast, np.nan)
+    is_car = told & (cover >= 0.5)
+    is_bg = told & (cover < 0.5)
+    end = np.ones(END_SAMPLES, int)
+    ends = np.flatnonzero((np.convolve(is_car.astype(int), end, mode="valid") == 0)
+                          & (np.convolve(is_bg.astype(int), end, mode="valid") >= END_TOLD))
+    if len(ends) == 0:
+        return None
+    last = np.flatnonzero(is_car[:ends[0]])
+    return j + (int(last[-1]) if len(last) else 0)
+
+
+def _car_grey(seen: np.ndarray, j: int) -> float | None:
+    """The car's grey along a row just behind its sample ``j``: the median of the samples
+    :data:`COVER_BEHIND` behind it (None where the row starts closer)."""
+    lo, hi = j - COVER_BEHIND[1], j - COVER_BEHIND[0]
+    return None if lo < 0 else float(np.median(seen[lo:hi]))
+
+
+def _half_covered(seen: np.ndarray, behind: np.ndarray, j: int, threshold: float) -> float | None:
+    """Where the car covers half a pixel along one row, in samples (fractional index).
+
+    A pixel the front end covers by a share ``f`` reads ``f car + (1 - f) background``,
+    so ``f = (seen - background) / (car - background)`` with the car's grey measured just
+    behind the front (samples :data:`COVER_BEHIND` behind ``j``, the car's last sample
+    above the threshold) and the background's at the pixel itself (frame 0). Its 0.5
+    crossing is the edge whatever the background's texture and grey, where a fixed
+    threshold moves the edge by up to half a pixel with the contrast ahead (a wall
+    before contact, the barrier after it). None where the car and the background differ
+    by less than ``threshold`` at the samples around the crossing.
+    """
+    car = _car_grey(seen, j)
+    if car is None:
+        return None
+    k = np.arange(max(j - 3, 0), min(j + 4, len(seen)))
+    contrast = car - behind[k]
+    if not np.all(np.abs(contrast) > threshold):
+        return None
+    cover = (seen[k] - behind[k]) / contrast
+    cross = np.flatnonzero((cover[:-1] >= 0.5) & (cover[1:] < 0.5))
+    if len(cross) == 0:
+        return None
+    m = cross[-1]
+    a, b = cover[m], cover[m + 1]
+    return float(k[m] + (a - 0.5) / (a - b))
 
 
 class FrontEndDetector(Detector):
@@ -252,29 +351,38 @@ class FrontEndDetector(Detector):
     the nose's rows, the columns from behind the front to ahead of it, the threshold and
     the camera's shift against the background. One candidate (or none): the front's
     column at the rows' middle; ``quality`` the share of the rows that showed it;
-    ``found`` is ``(u, sigma, rows_used)`` as :func:`front_column` returns it.
+    ``found`` is ``(u, sigma, front_rows)`` as :func:`front_column` returns it.
     """
 
     kind = "front end"
 
     def __init__(self, background: np.ndarray, rows: np.ndarray, u_from: float, u_to: float,
-                 threshold: float, bg_shift: np.ndarray | None = None):
+                 threshold: float, bg_shift: np.ndarray | None = None, min_contrast: float | None = None):
         self.background, self.rows = background, np.asarray(rows, float)
         self.u_from, self.u_to, self.threshold, self.bg_shift = u_from, u_to, threshold, bg_shift
+        self.min_contrast = min_contrast
 
     def detect(self, frame: np.ndarray) -> Candidates:
-        u, sig, used = front_column(frame, self.background, self.rows, self.u_from, self.u_to,
-                                    self.threshold, self.bg_shift)
+        u, sig, front_rows = front_column(frame, self.background, self.rows, self.u_from, self.u_to,
+                                          self.threshold, self.bg_shift, self.min_contrast)
         if not np.isfinite(u):
-            return self._candidates(np.zeros((0, 2)), np.zeros(0), (u, sig, used))
-        return self._candidates([u, float(np.mean(self.rows))], [used / len(self.rows)], (u, sig, used))
+            return self._candidates(np.zeros((0, 2)), np.zeros(0), (u, sig, front_rows))
+        return self._candidates([u, float(np.mean(self.rows))], [len(front_rows) / len(self.rows)],
+                                (u, sig, front_rows))
 
 
 def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: BodyPose,
                 nose_ref: np.ndarray, rows_ref: tuple[float, float], direction: int,
                 guess_s: float, *, to_pose: Callable[[int, np.ndarray], np.ndarray] | None = None,
-                search_px: float = 10.0) -> SeenContact:
+                search_px: float = 10.0,
+                row_lag_px: Callable[[np.ndarray], np.ndarray] | None = None) -> SeenContact:
     """Look for the first contact in the picture (see the module's docstring).
+
+    The rows that show the front end are not always the nose's first point: a bumper's
+    lower edge as grey as the floor behind it, or a rounded nose whose rows stand a few mm
+    behind its tip. Such a row stops when the crush reaches its own distance behind the
+    tip, after the contact. With ``row_lag_px`` the stop is taken back by that distance
+    along the rigid front end's path (:func:`back_to_the_tip`).
 
     The background is frame 0, where the car has not yet reached the columns searched
     (frames whose search would reach back to the nose's place in frame 0 are skipped).
@@ -301,6 +409,10 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         coordinates (lens and camera shake taken out); identity when None.
     search_px : float
         How far behind and ahead of the predicted front end to look, px.
+    row_lag_px : callable, optional
+        ``row_lag_px(v)`` -> how far the outline at rows ``v`` (the reference frame's, px)
+        stands behind the nose's tip, px (NaN where the outline has no front); None: the
+        rows' front is the tip.
 
     Returns
     -------
@@ -336,10 +448,11 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     if abs(located) > NOSE_OFF_PX:  # within it the search's margins hold the front
         nose_ref = nose_ref + np.array([located, 0.0])
         nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
-    level, threshold = np.nan, np.nan
+    level, threshold, min_contrast = np.nan, np.nan, np.nan
     u_rigid = np.full(len(idx), np.nan)
     u_seen = np.full(len(idx), np.nan)
     s_seen = np.full(len(idx), np.nan)
+    lag = np.full(len(idx), np.nan)  # how far the rows that showed the front stand behind the tip, px
     last = None  # the last frame where the front end was found
     for k, i in enumerate(idx):
         if not np.isfinite(pose.point[i, 0]):
@@ -366,12 +479,19 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
                 return not_seen(f"the car's front differs from the background by {level:.1f} grey levels "
                                 f"(noise {noise:.1f}): too little to see it stop")
             threshold = 0.5 * level
-        front = FrontEndDetector(background, rows, u_from, raw[0] + d * search_px, threshold, shift).detect(gray)
+            min_contrast = max(CONTRAST_NOISES * noise, CONTRAST_MIN)
+        front = FrontEndDetector(background, rows, u_from, raw[0] + d * search_px, threshold, shift,
+                                 min_contrast).detect(gray)
         if not len(front):
             continue
-        u, sig, _ = front.found
+        u, sig, front_rows = front.found
         u = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
         u_seen[k], s_seen[k] = u, sig
+        if row_lag_px is not None:
+            # the rows' most forward share stands for the front: their least lags
+            lags = np.asarray(row_lag_px(front_rows - (nose[1] - nose_ref[1])), float)
+            if np.isfinite(lags).any():
+                lag[k] = float(np.nanquantile(lags, 1.0 - FORWARD_QUANTILE))
         last = (int(i), gray, rows, shift, float(nose[1]))
     found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
     if found is None:
@@ -387,7 +507,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     stop_raw = to_raw(i_last, np.array([[stop_u, v_nose]]))[0, 0]
     car = np.nanmedian(sample(gray, _band(stop_raw - d * np.arange(2.0, 7.0), rows)), axis=1)
     beyond = np.nanmedian(sample(background, _band(stop_raw + d * np.arange(2.0, 9.0), rows) - shift), axis=1)
-    if not np.mean(np.abs(car - beyond) > threshold) >= 0.5:
+    if not np.mean(np.abs(car - beyond) > min_contrast) >= 0.5:
         return not_seen(f"the front end stops at column {stop_u:.1f} px, but beyond it the car would not stand "
                         "out of what is behind it there (as grey as the barrier it would pass in front of): "
                         "a stop cannot be told from passing on")
@@ -407,9 +527,44 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     ts_sig = float(np.hypot(ts_sig, SEEN_FLOOR_FRAMES / fps))
     off = (f" (the picture's front stood {abs(located):.1f} px {'ahead of' if d * located > 0 else 'behind'} "
            "the vehicle outline's nose)" if abs(located) > NOSE_OFF_PX else "")
+    stopped = f"the front end stopped at {ts * 1e3:.2f} ms at column {stop_u:.1f} px, in the car's own plane{off}"
+    before = np.isfinite(lag) & (t[idx] < ts) & (t[idx] >= ts - FRAMES_BEFORE / fps)
+    if before.any() and np.median(lag[before]) > 0.0:
+        lag_px = float(np.median(lag[before]))
+        tc = back_to_the_tip(t[idx], u_rigid, d, ts, lag_px)
+        ts_sig = float(np.hypot(ts_sig, TIP_LAG_REL_SIGMA * (ts - tc)))
+        stopped += (f"; its rows stand {lag_px:.1f} px behind the outline's tip, which reached the face "
+                    f"{(ts - tc) * 1e3:.2f} ms earlier")
+        ts = tc
     return SeenContact("seen", ts, ts_sig, stop_u, stop_sig,
-                       f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: the front end stopped "
-                       f"at column {stop_u:.1f} px, in the car's own plane{off}; reduced chi-square {reduced:.1f}")
+                       f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: {stopped}; "
+                       f"reduced chi-square {reduced:.1f}")
+
+
+def back_to_the_tip(t: np.ndarray, u_rigid: np.ndarray, direction: int, ts: float, lag_px: float) -> float:
+    """When the nose's tip reached the column where rows ``lag_px`` behind it stopped at
+    ``ts``: the time at which the rigidly carried front end stood ``lag_px`` short of
+    where it was at ``ts`` (linear between frames), s.
+
+    Parameters
+    ----------
+    t : (n,) s
+        Frame times, increasing.
+    u_rigid : (n,) px
+        The rigidly carried front end (NaN where not measured).
+    direction : +1 or -1
+        Direction of travel in the image.
+    ts : float
+        Time at which the rows stopped, s.
+    lag_px : float
+        How far those rows stand behind the tip, px (>= 0).
+    """
+    ok = np.isfinite(u_rigid) & (t <= ts + 2.0 * float(np.median(np.diff(t))))
+    tt, ahead = t[ok], direction * u_rigid[ok]
+    at_stop = float(np.interp(ts, tt, ahead))
+    # before the contact the car advances every frame; after it, the cell slows but goes on
+    ahead = np.maximum.accumulate(ahead)
+    return float(min(np.interp(at_stop - lag_px, ahead, tt), ts))
 
 
 def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background, to_pose,
@@ -467,6 +622,34 @@ def _frame_against(frame_at, i: int, background: np.ndarray, rows: np.ndarray, r
 
     gray = to_gray(frame_at(int(i)))
     return gray / _brightness_ratio(gray, background, rows, ratio_from, direction, shift)
+
+
+def outline_lag_m(outline: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """How far a side outline's front stands behind its most forward point at heights ``z``.
+
+    Parameters
+    ----------
+    outline : (N, 2) m
+        Closed polygon ``(x, z)``, x forward.
+    z : (M,) m
+        Heights.
+
+    Returns
+    -------
+    (M,) m
+        The tip's x minus the outline's most forward crossing at each height (NaN where
+        no edge crosses it).
+    """
+    p = np.asarray(outline, float)
+    a, b = p, np.roll(p, -1, axis=0)
+    z = np.asarray(z, float)[:, None]
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    dz = b[:, 1] - a[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.where(dz != 0, (z - a[:, 1]) / dz, 0.0)
+    x = np.where((z >= lo) & (z <= hi), a[:, 0] + f * (b[:, 0] - a[:, 0]), -np.inf)
+    front = x.max(axis=1)
+    return np.where(np.isfinite(front), p[:, 0].max() - front, np.nan)
 
 
 def raw_points(to_pose: Callable[[int, np.ndarray], np.ndarray], i: int, p: np.ndarray) -> np.ndarray:

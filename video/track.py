@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from video.contact_seen import NOSE_BAND_M, SeenContact, not_seen, see_contact, settle_contact
+from video.contact_seen import NOSE_BAND_M, SeenContact, not_seen, outline_lag_m, see_contact, settle_contact
 from video.errors import NoTapeError, VideoError
 from video.filters import velocity
 from video.follow import Progress, TargetTracks, TrackerConfig, prefetch, track_targets
@@ -191,10 +191,10 @@ def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car, hubs_measur
     return out
 
 
-def _contact_in_picture(film, frame_t, pose, cg_uv, car: CarGeometry, s: float, d: int, onset_s: float,
-                        lens, stab) -> SeenContact:
-    """First contact in the picture (:mod:`video.contact_seen`), the nose placed from the CG
-    and the vehicle's outline (the picture's own front may stand a few px off it)."""
+def _contact_in_picture(film, frame_t, pose, cg_uv, axes: np.ndarray, car: CarGeometry, s: float, d: int,
+                        onset_s: float, lens, stab) -> SeenContact:
+    """First contact in the picture (:mod:`video.contact_seen`), the nose placed by
+    :func:`nose_in_picture` (the picture's own front may stand a few px off it)."""
     from video.calibrate import undistort_points
 
     def to_pose(i: int, p: np.ndarray) -> np.ndarray:
@@ -203,15 +203,54 @@ def _contact_in_picture(film, frame_t, pose, cg_uv, car: CarGeometry, s: float, 
             p = p - stab.shift_px[i]
         return p
 
+    placed = nose_in_picture(car, cg_uv, axes, s)
+    if isinstance(placed, str):
+        return not_seen(placed)
+    nose, rows, row_lag_px = placed
+    return see_contact(film.__getitem__, frame_t, pose, nose, rows, d, onset_s, to_pose=to_pose,
+                       row_lag_px=row_lag_px)
+
+
+def nose_in_picture(car: CarGeometry, cg_uv: np.ndarray, axes: np.ndarray, s: float):
+    """The undeformed nose in the picture, from the CG and the vehicle's outline along the
+    car plane's axes in the image (a camera rolled by 3 degrees moves the nose of a car
+    2 m ahead of its CG by 10 cm up or down, against the image's own axes).
+
+    Parameters
+    ----------
+    car : CarGeometry
+    cg_uv : (2,) px
+        The CG in the picture.
+    axes : (2, 2)
+        Image unit vectors of car-plane X (travel) and Z (up), :func:`video.motion.travel_axes`.
+    s : float
+        Scale, m/px.
+
+    Returns
+    -------
+    (nose, rows, row_lag_px) or str
+        The nose's middle (2,) px; the band of rows (top, bottom) px where the outline
+        stands within :data:`video.contact_seen.NOSE_BAND_M` of its tip; and
+        ``row_lag_px(v)``, how far the outline at rows ``v`` stands behind the tip, px. A
+        sentence saying why when the band is under 5 rows high.
+    """
     sil = np.asarray(car.silhouette_side, float)
-    front = sil[sil[:, 0] >= sil[:, 0].max() - NOSE_BAND_M]
-    z_lo, z_hi = float(front[:, 1].min()), float(front[:, 1].max())
-    cg_v = float(cg_uv[1])
-    rows = (cg_v - (z_hi - car.cg_height) / s - 1.0, cg_v - (z_lo - car.cg_height) / s + 1.0)
-    if rows[1] - rows[0] < 5:
-        return not_seen("the vehicle outline's front is under 5 rows high at this scale")
-    nose = np.array([cg_uv[0] + d * (sil[:, 0].max() - car.x_cg) / s, 0.5 * sum(rows)])
-    return see_contact(film.__getitem__, frame_t, pose, nose, rows, d, onset_s, to_pose=to_pose)
+    z = np.arange(sil[:, 1].min(), sil[:, 1].max(), 0.25 * s)
+    band = z[outline_lag_m(sil, z) <= NOSE_BAND_M]
+    if band.size == 0 or (band.max() - band.min()) / s < 4:
+        return "the vehicle outline's front is under 5 rows high at this scale"
+    ex, ez = np.asarray(axes, float)
+    tip = np.asarray(cg_uv, float) + ex * (sil[:, 0].max() - car.x_cg) / s
+
+    def at_height(zz):
+        return tip + np.multiply.outer(np.asarray(zz, float) - car.cg_height, ez) / s
+
+    top, bottom = sorted((float(at_height(band.max())[1]), float(at_height(band.min())[1])))
+
+    def row_lag_px(v: np.ndarray) -> np.ndarray:
+        return outline_lag_m(sil, car.cg_height + (np.asarray(v, float) - tip[1]) * s / ez[1]) / s
+
+    return at_height(0.5 * (band.min() + band.max())), (top - 1.0, bottom + 1.0), row_lag_px
 
 
 # ------------------------------------------------------------------------ stages
@@ -463,7 +502,7 @@ def _contact(film, p: _Pose, dropped, cg_uv, cg_src, car, s, d, lens, stab, fps,
         x_fit = p.XZ[:, 0]
         tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps)
     notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
-    seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, car, s, d, tc, lens, stab) \
+    seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, p.axes, car, s, d, tc, lens, stab) \
         if cg_src and config.see_contact else None
     tc_sigma = None
     if seen is not None:
@@ -497,7 +536,7 @@ def _channels(p: _Pose, x_fit, tc: float, cf: int, s: float, s_sig: float, fps: 
     """x, z (m from the contact frame), pitch, vx and crush with their sigmas."""
     from video.motion import crush_from_pose
 
-    XZ, n = p.XZ, len(p.XZ)
+    XZ = p.XZ
     if not np.all(np.isfinite(XZ[cf])):
         raise VideoError(f"the car's position is not measured in the contact frame {cf} "
                          f"(body targets lost there); x, z have no reference")
