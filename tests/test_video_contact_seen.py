@@ -350,3 +350,10 @@ def test_the_front_is_where_the_car_covers_half_a_pixel_whatever_the_texture():
                 u, _, _ = front_column(img, bg, np.arange(5.0, 55.0), 40.0, 130.0, threshold=45.0, min_contrast=minc)
                 errs.append(u - front)
     assert np.max(np.abs(errs)) < 0.1
+
+
+def test_a_tip_crossing_before_the_frames_followed_is_not_made_up():
+    t = np.arange(10) / FPS
+    rigid = 400.0 - 2.5 * FPS * t
+    # 30 px behind the tip: the crossing lies 12 frames back, before the first frame
+    assert back_to_the_tip(t, rigid, -1, 0.0050, 30.0) == pytest.approx(0.0050)

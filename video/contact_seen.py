@@ -37,7 +37,7 @@ NOSE_BAND_M = 0.03
 #: Samples (0.5 px; 6 px) of background that end the car's run of columns in a row.
 GAP_SAMPLES = 12
 #: Samples behind the car's last sample above the threshold whose median is the car's grey
-#: at the front (0.5 px each: 1 to 5 px behind it)
+#: at the front (0.5 px each, from the first up to the last: 1 to 4.5 px behind it)
 COVER_BEHIND = (2, 10)
 #: Told apart by the grey (``min_contrast``), the car's run ends at this many samples (0.5 px)
 #: without the car, of which END_TOLD are told background: debris a few px ahead of the
@@ -229,7 +229,10 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
     -------
     (u, sigma, front_rows)
         The column px (NaN when fewer than three rows show the front), its one-sigma from
-        the rows' scatter (at least 0.1 px), and the rows that showed it (px).
+        the rows' scatter (at least :data:`FRONT_FLOOR_PX`), and the rows that showed it
+        (px). With ``min_contrast`` a row whose front the cover cannot place (the car and
+        the background too alike there, or the run ending within the first 5 px) is left
+        out; without it the fixed threshold places it.
     """
     from .calibrate_profile import sample
 
@@ -558,12 +561,20 @@ def back_to_the_tip(t: np.ndarray, u_rigid: np.ndarray, direction: int, ts: floa
         Time at which the rows stopped, s.
     lag_px : float
         How far those rows stand behind the tip, px (>= 0).
+
+    Returns
+    -------
+    float
+        The tip's contact, s; ``ts`` itself when the crossing lies before the frames of
+        ``u_rigid`` (nothing to interpolate).
     """
     ok = np.isfinite(u_rigid) & (t <= ts + 2.0 * float(np.median(np.diff(t))))
     tt, ahead = t[ok], direction * u_rigid[ok]
     at_stop = float(np.interp(ts, tt, ahead))
     # before the contact the car advances every frame; after it, the cell slows but goes on
     ahead = np.maximum.accumulate(ahead)
+    if not at_stop - lag_px >= ahead[0]:
+        return ts  # the tip's crossing lies before the frames followed: no correction
     return float(min(np.interp(at_stop - lag_px, ahead, tt), ts))
 
 

@@ -237,8 +237,8 @@ def nose_in_picture(car: CarGeometry, cg_uv: np.ndarray, axes: np.ndarray, s: fl
     sil = np.asarray(car.silhouette_side, float)
     z = np.arange(sil[:, 1].min(), sil[:, 1].max(), 0.25 * s)
     band = z[outline_lag_m(sil, z) <= NOSE_BAND_M]
-    if band.size == 0 or (band.max() - band.min()) / s < 4:
-        return "the vehicle outline's front is under 5 rows high at this scale"
+    if band.size == 0:
+        return "the vehicle outline has no front within its height"
     ex, ez = np.asarray(axes, float)
     tip = np.asarray(cg_uv, float) + ex * (sil[:, 0].max() - car.x_cg) / s
 
@@ -246,6 +246,8 @@ def nose_in_picture(car: CarGeometry, cg_uv: np.ndarray, axes: np.ndarray, s: fl
         return tip + np.multiply.outer(np.asarray(zz, float) - car.cg_height, ez) / s
 
     top, bottom = sorted((float(at_height(band.max())[1]), float(at_height(band.min())[1])))
+    if bottom - top + 2.0 < 5.0:
+        return "the vehicle outline's front is under 5 rows high at this scale"
 
     def row_lag_px(v: np.ndarray) -> np.ndarray:
         return outline_lag_m(sil, car.cg_height + (np.asarray(v, float) - tip[1]) * s / ez[1]) / s
