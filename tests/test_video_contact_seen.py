@@ -99,7 +99,7 @@ def test_the_front_column_against_a_textured_background(direction):
     img = _with_car(bg, front, direction=direction, debris=(int(front) + 10 * direction, slice(10, 30)))
     rows = np.arange(5.0, 55.0)
     u_from = front - direction * 30
-    u, sig, used = front_column(img, bg, rows, u_from, front + direction * 15, threshold=10.0)
+    u, sig, used, _ = front_column(img, bg, rows, u_from, front + direction * 15, threshold=10.0)
     assert len(used) >= 10  # rows that start on a patch of background as grey as the car are skipped
     # the car's colour is the texture's mean: only the difference from the background shows it
     # (a fixed threshold against a background of varying grey: up to half a pixel)
@@ -107,13 +107,17 @@ def test_the_front_column_against_a_textured_background(direction):
     assert sig >= 0.1
 
 
-def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None, occluder_from=None):
+def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None, occluder_from=None,
+                debris_rows=None, bg=None):
     """Frames of a car (uniform grey) whose front moves at ``v`` px/frame and stops at the
     fractional frame ``stop_frame``, over a textured background (left of the column
     ``barrier_from``: a barrier as grey as the car; left of ``occluder_from``: a darker
     barrier nearer the camera, in front of the car), with a body pose that keeps moving
-    (the passenger cell goes on after contact)."""
-    bg = _background(h=80, w=300, seed=4)
+    (the passenger cell goes on after contact). ``debris_rows``: from the frame after the
+    stop, a dark fragment in those rows joined to the front, 4.5 px ahead of it (flung
+    towards the camera, it shows beyond the face). ``bg``: the background (default a
+    textured one, 80 x 300)."""
+    bg = _background(h=80, w=300, seed=4) if bg is None else bg
     if barrier_from is not None:
         bg[:, :barrier_from] = 115.0
     nose0 = 230.0
@@ -122,6 +126,9 @@ def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None, 
         rigid = nose0 + v * i
         front = rigid if i < stop_frame else nose0 + v * stop_frame
         img = _with_car(bg, front, grey=115.0, direction=direction)
+        if debris_rows is not None and i > stop_frame:
+            fragment = _with_car(bg, front + direction * 4.5, grey=30.0, direction=direction)
+            img[debris_rows] = _with_car(fragment, front, grey=115.0, direction=direction)[debris_rows]
         if occluder_from is not None:
             img[:, :occluder_from] = 60.0
         frames.append(np.clip(img, 0, 255).astype(np.uint8))
@@ -139,6 +146,50 @@ def test_a_car_seen_stopping_gives_the_contact_between_frames():
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
     assert 0.0 < seen.sigma_s <= 2e-3
     assert "first contact seen" in seen.note
+
+
+def test_debris_joined_to_the_front_in_a_third_of_the_rows_does_not_move_the_contact():
+    # rows 22-35 of 20-60 show a fragment 4.5 px ahead of the stopped front: the rows' most
+    # forward share would stop where the fragment stands (frame 22.2); 3 px ahead of the
+    # rigid front end in frame 21, where the car cannot be, it is told and the rows'
+    # median followed
+    frames, pose, nose = _drawn_film(debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0))
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "seen" and "debris, or something else joined to it" in seen.note
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+
+
+def test_debris_with_no_clean_stop_in_the_median_rows_widens_the_sigma(monkeypatch):
+    # the median rows showing no clean stop (the second search): the most forward rows'
+    # stop stands, 1.8 ms late (the fragment 4.5 px ahead at 2.5 px a frame), and its
+    # sigma counts the time the rigid front end takes to cover what stood ahead of it
+    import video.contact_seen as cs
+
+    calls = []
+
+    def median_without_stop(*args):
+        calls.append(1)
+        return None if len(calls) == 2 else cs.stop_time.__wrapped__(*args)
+
+    median_without_stop.__wrapped__ = cs.stop_time
+    monkeypatch.setattr(cs, "stop_time", median_without_stop)
+    frames, pose, nose = _drawn_film(debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0))
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert len(calls) == 2 and seen.kind == "seen" and "may be up to" in seen.note
+    assert seen.time_s == pytest.approx(0.0222, abs=0.3e-3)
+    assert seen.sigma_s >= 0.0016 and abs(seen.time_s - 0.0204) <= 1.5 * seen.sigma_s
+
+
+def test_a_deceleration_onset_guessed_19_ms_late_still_frames_the_stop():
+    # a soft front's deceleration rises late: the front end is followed from 30 ms before
+    # the guess, so the stop at frame 20.4 has its frames of moving with the cell before it
+    frames, pose, nose = _drawn_film()
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.039)
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
 
 
 def test_a_car_as_grey_as_the_background_is_not_seen():
@@ -162,17 +213,27 @@ def test_settling_the_contact_prefers_the_picture_and_says_a_disagreement():
 def test_a_front_end_at_the_pictures_border_is_not_taken_for_the_front():
     bg = _background()
     img = _with_car(bg, 250.0, grey=200.0)  # a car lighter than any background covers it to its right border
-    u, _, used = front_column(img, bg, np.arange(5.0, 55.0), 150.0, 215.0, threshold=10.0)
+    u, _, used, _ = front_column(img, bg, np.arange(5.0, 55.0), 150.0, 215.0, threshold=10.0)
     assert len(used) == 0 and np.isnan(u)
 
 
 def test_a_stop_without_frames_of_the_front_end_moving_before_it_is_not_seen():
     # the front end can be told from frame 0's background only once it has moved past where
-    # it stood there: a stop before that leaves no frame of it moving with the cell
+    # it stood there: a stop 6 px on leaves no frame of it moving with the cell
+    frames, pose, nose = _drawn_film(stop_frame=2.4)
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.006)
+    assert seen.kind == "not_seen"
+
+
+def test_a_stop_soon_after_the_front_end_clears_its_place_in_frame_0_is_seen():
+    # 21 px on (frame 8.4): the frames from 8 px on show the front end moving with the cell
+    # (a car 1.2 px a frame on a far camera reaches the face 18 frames after frame 0)
     frames, pose, nose = _drawn_film(stop_frame=8.4)
     t = np.arange(len(frames)) / FPS
     seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.012)
-    assert seen.kind == "not_seen" and "shows no clean stop" in seen.note
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0084, abs=0.3e-3)
 
 
 def test_a_flickering_lamp_does_not_hide_the_stop():
@@ -214,13 +275,28 @@ def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping(
     assert seen.kind == "not_seen" and "does not stop" in seen.note
 
 
-def test_a_car_going_behind_a_barrier_nearer_the_camera_is_not_seen_stopping():
+@pytest.mark.parametrize("vanish_u", [None, 60.0, 200.0])
+def test_a_car_going_behind_a_barrier_nearer_the_camera_is_not_seen_stopping(vanish_u):
     # the barrier's edge (column 175) hides the front end from frame 22 on: in the picture
-    # it stops there, though it never touched anything
+    # it stops there, though it never touched anything. A nearer edge can show short of the
+    # face only where the face stands short of the column the depth direction vanishes to
+    # (the car travels to the left: a column left of 175, or within the margin of it)
     frames, pose, nose = _drawn_film(stop_frame=np.inf, occluder_from=175)
     t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024, vanish_u=vanish_u)
     assert seen.kind == "not_seen" and "cannot be told from going behind it" in seen.note
+
+
+def test_a_stop_at_an_edge_beyond_the_column_the_depth_direction_vanishes_to_is_the_contact():
+    # the same picture with the depth direction vanishing well to the right of the edge
+    # (the camera square to the car's plane at column 260 of 300): a nearer barrier's edge
+    # would show beyond the face there, so the front end standing at the edge is the face
+    # in the car's plane, reached at frame (230 - 175) / 2.5 = 22
+    frames, pose, nose = _drawn_film(stop_frame=np.inf, occluder_from=175)
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024, vanish_u=260.0)
+    assert seen.kind == "seen" and "at an edge of frame 0" in seen.note
+    assert seen.time_s == pytest.approx(0.022, abs=0.3e-3)
 
 
 @pytest.mark.parametrize("off", [12.0, -6.0])
@@ -320,9 +396,9 @@ def test_the_front_is_followed_over_background_of_another_grey():
     bg[:, 100:] = 135.0
     img = _car_over(bg, 112.3)
     rows = np.arange(5.0, 35.0)
-    u, _, used = front_column(img, bg, rows, 40.0, 140.0, threshold=45.0, min_contrast=9.0)
+    u, _, used, _ = front_column(img, bg, rows, 40.0, 140.0, threshold=45.0, min_contrast=9.0)
     assert len(used) == len(rows) and u == pytest.approx(112.3, abs=0.1)
-    u_fixed, _, _ = front_column(img, bg, rows, 40.0, 140.0, threshold=45.0)
+    u_fixed, _, _, _ = front_column(img, bg, rows, 40.0, 140.0, threshold=45.0)
     assert u_fixed == pytest.approx(100.0, abs=0.6)  # the fixed threshold stops at the edge
 
 
@@ -331,9 +407,9 @@ def test_debris_a_few_pixels_ahead_is_not_joined_to_the_front():
     img = _car_over(bg, 101.3)
     img[:, 105:109] = 250.0  # bright debris 4 px ahead of the front, in every row
     rows = np.arange(5.0, 35.0)
-    u, _, _ = front_column(img, bg, rows, 40.0, 130.0, threshold=40.0, min_contrast=9.0)
+    u, _, _, _ = front_column(img, bg, rows, 40.0, 130.0, threshold=40.0, min_contrast=9.0)
     assert u == pytest.approx(101.3, abs=0.1)
-    u_gap, _, _ = front_column(img, bg, rows, 40.0, 130.0, threshold=40.0)
+    u_gap, _, _, _ = front_column(img, bg, rows, 40.0, 130.0, threshold=40.0)
     assert u_gap > 107.0  # six pixels of background are needed to end the run without it
 
 
@@ -347,7 +423,7 @@ def test_the_front_is_where_the_car_covers_half_a_pixel_whatever_the_texture():
         for front in (100.2, 100.5, 100.8):
             img = _car_over(bg, front, car=200.0)
             for minc in (None, 6.0):
-                u, _, _ = front_column(img, bg, np.arange(5.0, 55.0), 40.0, 130.0, threshold=45.0, min_contrast=minc)
+                u, _, _, _ = front_column(img, bg, np.arange(5.0, 55.0), 40.0, 130.0, threshold=45.0, min_contrast=minc)
                 errs.append(u - front)
     assert np.max(np.abs(errs)) < 0.1
 

@@ -8,13 +8,18 @@ noise (a force growing with the crush moves the cell by less than 1 mm in the fi
 The contact is the instant at which the front end carried rigidly with the cell reaches the
 column where the visible front end stands after the stop (:func:`stop_time`), taken back to
 the nose's tip where the rows that show the front stand behind it (a rounded nose, a lower
-bumper as grey as the floor: :func:`back_to_the_tip`).
+bumper as grey as the floor: :func:`back_to_the_tip`). Debris flung from the contact
+towards the camera shows beyond the face and joins the front in a few rows: where the rows'
+most forward share stands ahead of where the car can be, their median is followed.
 
 Both are measured in the car's own plane, whatever the barrier's depth. The barrier's edge
 in the picture is not the face: a barrier side face 0.6 m nearer the camera than the car's
 side shows its edge about 0.14 m beyond the face (the nose touches the face short of the
 edge and stops there, in view); a barrier farther away shows it short of the face (the nose
-passes in front of it and stops beyond). The front end is found against the background as
+passes in front of it and stops beyond). Only where the face stands short of the column
+the depth direction vanishes to (a camera looking back at the face) does a nearer edge show
+short of the face, and hide the nose before it touches: a stop at an edge of frame 0 is not
+taken there. The front end is found against the background as
 it was in frame 0, before the car got there (:func:`front_column`), so wall texture and the
 barrier's own edges do not count.
 
@@ -49,7 +54,12 @@ FRONT_FLOOR_PX = 0.3
 #: Which of the rows' front columns stands for the front end (quantile in the travel direction).
 FORWARD_QUANTILE = 0.8
 #: The front end is followed from this long before the deceleration onset's first guess, s.
-WINDOW_BEFORE_S = 0.020
+WINDOW_BEFORE_S = 0.030
+#: The picture's front is placed against the outline's nose, and the car's contrast against
+#: the background measured, in the first frame from this long before the onset's guess on
+#: where the car has moved clear of its place in frame 0, s (the frames before it are
+#: followed too).
+LEVEL_BEFORE_S = 0.020
 #: ... to this long after it, s.
 WINDOW_AFTER_S = 0.015
 #: Frames the visible front end must be followed on each side of the stop.
@@ -57,6 +67,10 @@ MIN_FRAMES_EACH_SIDE = 4
 #: Frames before and after a candidate stop that judge it.
 FRAMES_BEFORE = 10
 FRAMES_AFTER = 6
+#: Debris comes with the contact: a front that stood ahead of where the car can be counts
+#: as something joined to it from this many frames before the stop its most forward rows
+#: show on (which such a fragment, a few px ahead, makes that many frames late)
+JOINED_FRAMES = 3
 #: A frame further than this many sigmas from the stop model is an outlier ...
 OUTLIER = 3.0
 #: ... and a window with more than this share of outliers is no stop.
@@ -82,6 +96,16 @@ TO_RAW_STEPS = 4
 #: A stop where frame 0 steps by more than the threshold, one way, in this share of the rows
 #: from two nose heights above to two below, is at the edge of something nearer the camera.
 EDGE_ROWS_SHARE = 0.6
+#: How far beyond the column the depth direction vanishes to a stop at such an edge must
+#: lie to be the contact, as a share of the picture's width: the principal point a few per
+#: cent off the picture's centre, and a camera yawed by up to 5 degrees against the car's
+#: plane (f tan 5 deg, f up to 1.2 widths), move that column by up to this much
+VANISH_MARGIN = 0.15
+#: The front end is followed in frames where the rigid nose stands at least twice this far
+#: beyond its place in frame 0 (the outline's nose, set right by the picture's front to
+#: within NOSE_OFF_PX), looked for from half-way there, or from ``search_px + 2`` px beyond
+#: it once the car is that far on, px
+FRAME0_CLEAR_PX = 4.0
 #: How far ahead of the vehicle outline's nose the picture's front end is looked for, px.
 LOCATE_PX = 40.0
 #: A picture's front further than this from the outline's nose moves the nose the front
@@ -197,7 +221,7 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
 
 def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_from: float,
                  u_to: float, threshold: float, bg_shift: np.ndarray | None = None,
-                 min_contrast: float | None = None) -> tuple[float, float, np.ndarray]:
+                 min_contrast: float | None = None) -> tuple[float, float, np.ndarray, np.ndarray]:
     """The car's front column in a band of rows: where it stops differing from the background.
 
     In each row that starts on the car at ``u_from`` (behind the front), the end of the
@@ -206,7 +230,7 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
     ``min_contrast``, where :data:`END_SAMPLES` do, and it goes on over background of
     another grey, :func:`_run_on`), refined to where the car covers half a pixel
     (:func:`_half_covered`); then the rows' :data:`FORWARD_QUANTILE` in the direction of
-    travel (the nose's most forward rows).
+    travel (the nose's most forward rows: :func:`front_of_rows`).
 
     Parameters
     ----------
@@ -227,10 +251,10 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
 
     Returns
     -------
-    (u, sigma, front_rows)
+    (u, sigma, front_rows, row_u)
         The column px (NaN when fewer than three rows show the front), its one-sigma from
-        the rows' scatter (at least :data:`FRONT_FLOOR_PX`), and the rows that showed it
-        (px). With ``min_contrast`` a row whose front the cover cannot place (the car and
+        the rows' scatter (at least :data:`FRONT_FLOOR_PX`), the rows that showed it (px)
+        and each one's front column (px). With ``min_contrast`` a row whose front the cover cannot place (the car and
         the background too alike there, or the run ending within the first 5 px) is left
         out; without it the fixed threshold places it.
     """
@@ -270,15 +294,25 @@ def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_f
             edge = j + ((a - threshold) / (a - b) if a > b else 0.5)
         found.append(us[0] + step * edge)
         front_rows.append(rows[r])
-    front_rows = np.asarray(front_rows, float)
-    if len(found) < 3:
-        return float("nan"), float("nan"), front_rows
-    found = np.asarray(found)
-    # the nose's most forward rows touch first; the rows behind them go on until they
-    # reach the face too, so the rows' median would stop late
-    u = float(np.quantile(found * step, FORWARD_QUANTILE) / step)
-    spread = 1.4826 * float(np.median(np.abs(found - np.median(found))))
-    return u, float(max(spread / np.sqrt(len(found)), FRONT_FLOOR_PX)), front_rows
+    found = np.asarray(found, float)
+    return front_of_rows(found, int(np.sign(step))) + (np.asarray(front_rows, float), found)
+
+
+def front_of_rows(row_u: np.ndarray, direction: int, quantile: float = FORWARD_QUANTILE) -> tuple[float, float]:
+    """The front end from the rows' front columns ``row_u`` (px): their ``quantile`` in the
+    direction of travel, and its one-sigma from their scatter (at least
+    :data:`FRONT_FLOOR_PX`), px; NaN when fewer than three rows show it.
+
+    The nose's most forward rows touch first; the rows behind them go on until they reach
+    the face too, so the rows' median stops late (:func:`back_to_the_tip` takes it back)
+    but moves less with debris joined to a few rows.
+    """
+    row_u = np.asarray(row_u, float)
+    if len(row_u) < 3:
+        return float("nan"), float("nan")
+    u = float(np.quantile(row_u * direction, quantile) * direction)
+    spread = 1.4826 * float(np.median(np.abs(row_u - np.median(row_u))))
+    return u, float(max(spread / np.sqrt(len(row_u)), FRONT_FLOOR_PX))
 
 
 def _run_on(seen: np.ndarray, behind: np.ndarray, j: int, min_contrast: float) -> int | None:
@@ -354,7 +388,7 @@ class FrontEndDetector(Detector):
     the nose's rows, the columns from behind the front to ahead of it, the threshold and
     the camera's shift against the background. One candidate (or none): the front's
     column at the rows' middle; ``quality`` the share of the rows that showed it;
-    ``found`` is ``(u, sigma, front_rows)`` as :func:`front_column` returns it.
+    ``found`` is ``(u, sigma, front_rows, row_u)`` as :func:`front_column` returns it.
     """
 
     kind = "front end"
@@ -366,19 +400,20 @@ class FrontEndDetector(Detector):
         self.min_contrast = min_contrast
 
     def detect(self, frame: np.ndarray) -> Candidates:
-        u, sig, front_rows = front_column(frame, self.background, self.rows, self.u_from, self.u_to,
-                                          self.threshold, self.bg_shift, self.min_contrast)
+        found = front_column(frame, self.background, self.rows, self.u_from, self.u_to,
+                             self.threshold, self.bg_shift, self.min_contrast)
+        u, _, front_rows, _ = found
         if not np.isfinite(u):
-            return self._candidates(np.zeros((0, 2)), np.zeros(0), (u, sig, front_rows))
-        return self._candidates([u, float(np.mean(self.rows))], [len(front_rows) / len(self.rows)],
-                                (u, sig, front_rows))
+            return self._candidates(np.zeros((0, 2)), np.zeros(0), found)
+        return self._candidates([u, float(np.mean(self.rows))], [len(front_rows) / len(self.rows)], found)
 
 
 def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: BodyPose,
                 nose_ref: np.ndarray, rows_ref: tuple[float, float], direction: int,
                 guess_s: float, *, to_pose: Callable[[int, np.ndarray], np.ndarray] | None = None,
                 search_px: float = 10.0,
-                row_lag_px: Callable[[np.ndarray], np.ndarray] | None = None) -> SeenContact:
+                row_lag_px: Callable[[np.ndarray], np.ndarray] | None = None,
+                vanish_u: float | None = None) -> SeenContact:
     """Look for the first contact in the picture (see the module's docstring).
 
     The rows that show the front end are not always the nose's first point: a bumper's
@@ -439,71 +474,112 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     if not np.isfinite(pose.point[0, 0]):
         return not_seen("the car's pose is not measured in frame 0, whose picture is the background")
     background = to_gray(frame_at(0))
+    idx = np.arange(i0, i1 + 1)
+    # the window's frames read once, in order (a video is decoded from its start again
+    # whenever a frame before the last one read is asked for)
+    cache = {int(i): frame_at(int(i)) for i in idx}
+    frame_at = cache.__getitem__
     v0, v1 = sorted(rows_ref)
     nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
     # the picture's front against the outline's nose (a vehicle file's outline or CG may
     # stand a few cm off the car's), once, in the first frame where the car has left its
     # place in frame 0 far enough; the nose is moved by it
-    idx = np.arange(i0, i1 + 1)
-    located = _locate_front(frame_at, idx, pose, nose_ref, nose0, (v0, v1), d, background, to_pose, search_px)
+    near = idx[idx >= int(np.floor((guess_s - LEVEL_BEFORE_S) * fps))]
+    located = _locate_front(frame_at, near, pose, nose_ref, nose0, (v0, v1), d, background, to_pose, search_px)
     if isinstance(located, str):
         return not_seen(located)
     if abs(located) > NOSE_OFF_PX:  # within it the search's margins hold the front
         nose_ref = nose_ref + np.array([located, 0.0])
         nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
-    level, threshold, min_contrast = np.nan, np.nan, np.nan
+    placed = [(k, int(i)) + _nose_in_frame(pose, i, nose_ref, (v0, v1), to_pose)
+              for k, i in enumerate(idx) if np.isfinite(pose.point[i, 0])]
+    # the car's own difference from the background just behind its front, and the
+    # background's own (noise, compression) just ahead of it, in the first frame from
+    # LEVEL_BEFORE_S before the onset's guess on where the car has left behind it a band
+    # that frame 0 shows without the car
+    first = next((p for p in placed if d * (p[3][0] - nose0[0]) >= 2.0 * search_px + 2.0
+                  and p[1] >= near[0]), None)
+    if first is None:
+        return not_seen(f"the car does not move {2.0 * search_px + 2.0:g} px from where it stood in frame 0 "
+                        f"within frames {idx[0]}-{idx[-1]}: no background to see its front against")
+    _, i, nose, raw, rows, shift = first
+    gray = _frame_against(frame_at, i, background, rows, raw[0] + d * (search_px + 2.0), d, shift)
+    behind = _band(raw[0] - d * np.arange(4.0, 16.0), rows)
+    ahead = _band(raw[0] + d * np.arange(3.0, 9.0), rows)
+    level = float(np.nanmedian(np.abs(sample(gray, behind) - sample(background, behind - shift))))
+    noise = 1.4826 * float(np.nanmedian(np.abs(sample(gray, ahead) - sample(background, ahead - shift))))
+    if not (np.isfinite(level) and np.isfinite(noise)):
+        return not_seen(f"the car's front is not in the picture in frame {i}")
+    if not level > max(CONTRAST_NOISES * noise, CONTRAST_MIN):
+        return not_seen(f"the car's front differs from the background by {level:.1f} grey levels "
+                        f"(noise {noise:.1f}): too little to see it stop")
+    threshold = 0.5 * level
+    min_contrast = max(CONTRAST_NOISES * noise, CONTRAST_MIN)
     u_rigid = np.full(len(idx), np.nan)
-    u_seen = np.full(len(idx), np.nan)
-    s_seen = np.full(len(idx), np.nan)
-    lag = np.full(len(idx), np.nan)  # how far the rows that showed the front stand behind the tip, px
+    # the front end per frame, its sigma and how far the rows that showed it stand behind
+    # the tip (px): as the rows' most forward share shows it, and as their median does
+    # (debris joined to the front in a few rows moves the one and not the other)
+    series = {q: (np.full(len(idx), np.nan), np.full(len(idx), np.nan), np.full(len(idx), np.nan))
+              for q in (FORWARD_QUANTILE, 0.5)}
     last = None  # the last frame where the front end was found
-    for k, i in enumerate(idx):
-        if not np.isfinite(pose.point[i, 0]):
-            continue
-        nose, raw, rows, shift = _nose_in_frame(pose, i, nose_ref, (v0, v1), to_pose)
+    for k, i, nose, raw, rows, shift in placed:
         u_rigid[k] = nose[0]
-        # from just ahead of where the car stood in frame 0 (the background behind that
-        # shows the car) to a little ahead of the rigid front end: the visible front end
-        # is the most forward column that differs from the background
-        u_from = nose0[0] + d * (search_px + 2.0)
-        if d * (raw[0] - u_from) < search_px:
-            continue  # the front end may still be behind the searched columns
+        moved = d * (raw[0] - nose0[0])
+        if moved < 2.0 * FRAME0_CLEAR_PX:
+            continue  # the front end may still stand where the car stood in frame 0
+        # from ahead of where the car stood in frame 0 (the background behind that shows
+        # the car) to a little ahead of the rigid front end: the visible front end is the
+        # most forward column that differs from the background
+        u_from = nose0[0] + d * min(search_px + 2.0, 0.5 * moved)
         gray = _frame_against(frame_at, i, background, rows, raw[0] + d * (search_px + 2.0), d, shift)
-        if not np.isfinite(level):
-            # the car's own difference from the background just behind its front, and the
-            # background's own (noise, compression) just ahead of it
-            behind = _band(raw[0] - d * np.arange(4.0, 16.0), rows)
-            ahead = _band(raw[0] + d * np.arange(3.0, 9.0), rows)
-            level = float(np.nanmedian(np.abs(sample(gray, behind) - sample(background, behind - shift))))
-            noise = 1.4826 * float(np.nanmedian(np.abs(sample(gray, ahead) - sample(background, ahead - shift))))
-            if not (np.isfinite(level) and np.isfinite(noise)):
-                return not_seen(f"the car's front is not in the picture in frame {i}")
-            if not level > max(CONTRAST_NOISES * noise, CONTRAST_MIN):
-                return not_seen(f"the car's front differs from the background by {level:.1f} grey levels "
-                                f"(noise {noise:.1f}): too little to see it stop")
-            threshold = 0.5 * level
-            min_contrast = max(CONTRAST_NOISES * noise, CONTRAST_MIN)
         front = FrontEndDetector(background, rows, u_from, raw[0] + d * search_px, threshold, shift,
                                  min_contrast).detect(gray)
         if not len(front):
             continue
-        u, sig, front_rows = front.found
-        u = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
-        u_seen[k], s_seen[k] = u, sig
-        if row_lag_px is not None:
-            # the rows' most forward share stands for the front: their least lags
-            lags = np.asarray(row_lag_px(front_rows - (nose[1] - nose_ref[1])), float)
+        _, _, front_rows, row_u = front.found
+        lags = (np.asarray(row_lag_px(front_rows - (nose[1] - nose_ref[1])), float) if row_lag_px is not None
+                else np.full(len(front_rows), np.nan))
+        for q, (u_q, s_q, lag_q) in series.items():
+            u, s_q[k] = front_of_rows(row_u, d, q)
+            u_q[k] = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
             if np.isfinite(lags).any():
-                lag[k] = float(np.nanquantile(lags, 1.0 - FORWARD_QUANTILE))
+                # the rows that stand for the front: their lags at the same quantile
+                lag_q[k] = float(np.nanquantile(lags, 1.0 - q))
         last = (int(i), gray, rows, shift, float(nose[1]))
+    u_seen, s_seen, lag = series[FORWARD_QUANTILE]
     found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
+    ahead_px, late_s = 0.0, 0.0
+    if found is None:
+        joined = "; the rows' median front is followed, their most forward ones showing no clean stop"
+    else:
+        ahead_px, t_ahead = _joined_ahead(t[idx], u_rigid, u_seen, s_seen, found[0], d)
+        joined = "" if not ahead_px else (
+            f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car can be "
+            "(debris, or something else joined to it): the rows' median front is followed")
+    if joined:
+        # something joined the front in its most forward rows, ahead of where the car
+        # can be (debris flung towards the camera shows beyond the face): the median row
+        median = series[0.5]
+        by_median = stop_time(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
+        if by_median is not None or found is None:
+            u_seen, s_seen, lag = median
+            found = by_median
+        else:
+            # no clean stop in the median rows: the most forward rows' stop stands; what
+            # joined the front came with the contact or after it, so the contact lies
+            # before the first frame that shows it, and after the frame before that
+            late_s = max(found[0] - t_ahead, 0.0) + 1.0 / fps
+            joined = (f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car "
+                      f"can be (debris, or something else joined to it), and their median shows no clean stop: the stop may be up to "
+                      f"{late_s * 1e3:.2f} ms late, which the sigma counts")
+    which = ", neither in its most forward rows nor in their median," if joined else ""
     if found is None:
         return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "
-                        "around the deceleration onset, shows no clean stop (too few frames on one side "
+                        f"around the deceleration onset, shows no clean stop{which} (too few frames on one side "
                         "of it, or more than a quarter of them off a stop)")
     ts, ts_sig, stop_u, gain, reduced = found
     if gain < MIN_CHI2_GAIN:
-        return not_seen(f"the front end does not stop in frames {i0}-{i1} (chi-square gain {gain:.1f})")
+        return not_seen(f"the front end does not stop in frames {i0}-{i1}{which} (chi-square gain {gain:.1f})")
     # a stop where the car would not have stood out of the background had it gone on (the
     # car as grey as the barrier it passes in front of) cannot be told from passing on
     i_last, gray, rows, shift, v_nose = last
@@ -514,23 +590,34 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         return not_seen(f"the front end stops at column {stop_u:.1f} px, but beyond it the car would not stand "
                         "out of what is behind it there (as grey as the barrier it would pass in front of): "
                         "a stop cannot be told from passing on")
-    # a stop at a straight edge of frame 0 running far above and below the nose (a barrier's
-    # edge nearer the camera than the car's side hides the nose before it touches the
-    # face) cannot be told from contact; a textured background's edges do not run on
+    # a stop at a straight edge of frame 0 running far above and below the nose: a barrier's
+    # edge nearer the camera than the car's side hides the nose before it touches the face
+    # where the face stands short of the column the depth direction vanishes to (the edge
+    # shows short of the face there); beyond that column the nearer edge shows beyond the
+    # face and a farther one is drawn behind the car, so a stop at an edge there is the
+    # face in the car's plane. A textured background's edges do not run on.
     tall = np.arange(max(rows[0] - 2 * len(rows), 2), min(rows[-1] + 2 * len(rows), background.shape[0] - 3) + 1)
     step = (np.nanmedian(sample(background, _band(stop_raw + d * np.arange(2.0, 7.0), tall) - shift), axis=1)
             - np.nanmedian(sample(background, _band(stop_raw - d * np.arange(2.0, 7.0), tall) - shift), axis=1))
     step = step[np.isfinite(step)]
-    if len(step) >= len(rows) and max(np.mean(step > threshold), np.mean(step < -threshold)) >= EDGE_ROWS_SHARE:
-        return not_seen(f"the front end stops at column {stop_u:.1f} px, where frame 0 shows an edge (a barrier "
-                        "edge nearer the camera than the car's side hides the nose before it touches the face): "
-                        "a stop cannot be told from going behind it")
+    at_edge = len(step) >= len(rows) and max(np.mean(step > threshold), np.mean(step < -threshold)) >= EDGE_ROWS_SHARE
+    margin = VANISH_MARGIN * background.shape[1]
+    if at_edge and not (vanish_u is not None and d * (stop_u - vanish_u) > margin):
+        where = ("not well beyond the column the depth direction vanishes to" if vanish_u is not None
+                 else "the column the depth direction vanishes to not being known")
+        return not_seen(f"the front end stops at column {stop_u:.1f} px, where frame 0 shows an edge, {where} "
+                        "(a barrier edge nearer the camera than the car's side hides the nose there before it "
+                        "touches the face): a stop cannot be told from going behind it")
     after = np.isfinite(u_seen) & (t[idx] >= ts)
     stop_sig = float(np.sqrt(1.0 / np.sum(1.0 / s_seen[after] ** 2))) if after.any() else float("nan")
-    ts_sig = float(np.hypot(ts_sig, SEEN_FLOOR_FRAMES / fps))
+    ts_sig = float(np.sqrt(ts_sig**2 + (SEEN_FLOOR_FRAMES / fps) ** 2 + late_s**2))
     off = (f" (the picture's front stood {abs(located):.1f} px {'ahead of' if d * located > 0 else 'behind'} "
            "the vehicle outline's nose)" if abs(located) > NOSE_OFF_PX else "")
     stopped = f"the front end stopped at {ts * 1e3:.2f} ms at column {stop_u:.1f} px, in the car's own plane{off}"
+    if at_edge:
+        stopped += (", at an edge of frame 0 beyond the column the depth direction vanishes to (the barrier's "
+                    "face in the car's plane)")
+    stopped += joined
     before = np.isfinite(lag) & (t[idx] < ts) & (t[idx] >= ts - FRAMES_BEFORE / fps)
     if before.any() and np.median(lag[before]) > 0.0:
         lag_px = float(np.median(lag[before]))
@@ -542,6 +629,25 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     return SeenContact("seen", ts, ts_sig, stop_u, stop_sig,
                        f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: {stopped}; "
                        f"reduced chi-square {reduced:.1f}")
+
+
+def _joined_ahead(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+                  ts: float, direction: int) -> tuple[float, float]:
+    """Where the front seen stood ahead of the rigidly carried front end, where the car
+    cannot be, from :data:`JOINED_FRAMES` frames before the stop at ``ts`` to the end of
+    the frames that judge it: by more than :data:`OUTLIER` sigmas and a pixel beyond the
+    offset the frames before the stop show. The most it did, px, and the first frame's
+    time, s; (0, NaN) when it never did."""
+    dt = float(np.median(np.diff(t)))
+    inside = (t >= ts - FRAMES_BEFORE * dt) & (t < ts + FRAMES_AFTER * dt) & np.isfinite(u_seen) \
+        & np.isfinite(u_rigid)
+    pre = inside & (t < ts)
+    if not pre.any():
+        return 0.0, float("nan")
+    c = float(np.median(u_seen[pre] - u_rigid[pre]))
+    ahead = direction * (u_seen - u_rigid - c)
+    bad = inside & (t >= ts - JOINED_FRAMES * dt) & (ahead > OUTLIER * sigma + 1.0)
+    return (float(np.max(ahead[bad])), float(t[bad][0])) if bad.any() else (0.0, float("nan"))
 
 
 def back_to_the_tip(t: np.ndarray, u_rigid: np.ndarray, direction: int, ts: float, lag_px: float) -> float:
