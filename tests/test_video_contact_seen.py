@@ -160,17 +160,21 @@ def test_debris_joined_to_the_front_in_a_third_of_the_rows_does_not_move_the_con
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
 
 
-def test_debris_with_no_clean_stop_in_the_median_rows_widens_the_sigma(monkeypatch):
-    # the median rows showing no clean stop (the second search): the most forward rows'
-    # stop stands, 1.8 ms late (the fragment 4.5 px ahead at 2.5 px a frame), and its
-    # sigma counts the time the rigid front end takes to cover what stood ahead of it
+@pytest.mark.parametrize("median_says", ["no clean stop", "no gain"])
+def test_debris_with_no_clean_stop_in_the_median_rows_widens_the_sigma(monkeypatch, median_says):
+    # the median rows showing no clean stop, or a "stop" that explains them no better than
+    # none (the second search): the most forward rows' stop stands, 1.8 ms late (the
+    # fragment 4.5 px ahead at 2.5 px a frame), and its sigma counts the time since the
+    # first frame that showed the fragment
     import video.contact_seen as cs
 
     calls = []
 
     def median_without_stop(*args):
         calls.append(1)
-        return None if len(calls) == 2 else cs.stop_time.__wrapped__(*args)
+        if len(calls) == 2:
+            return None if median_says == "no clean stop" else (0.030, 1e-4, 150.0, 0.5, 1.0)
+        return cs.stop_time.__wrapped__(*args)
 
     median_without_stop.__wrapped__ = cs.stop_time
     monkeypatch.setattr(cs, "stop_time", median_without_stop)
@@ -190,6 +194,15 @@ def test_a_deceleration_onset_guessed_19_ms_late_still_frames_the_stop():
     seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.039)
     assert seen.kind == "seen"
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+
+
+def test_an_onset_guessed_past_the_frames_is_not_seen_without_an_error():
+    # 50 frames; an onset guessed at 70.5 ms leaves frames 40-49 around it, none of them
+    # from 20 ms before the guess on, where the nose is placed
+    frames, pose, nose = _drawn_film()
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.0705)
+    assert seen.kind == "not_seen" and "too few frames" in seen.note
 
 
 def test_a_car_as_grey_as_the_background_is_not_seen():

@@ -13,15 +13,15 @@ towards the camera shows beyond the face and joins the front in a few rows: wher
 most forward share stands ahead of where the car can be, their median is followed.
 
 Both are measured in the car's own plane, whatever the barrier's depth. The barrier's edge
-in the picture is not the face: a barrier side face 0.6 m nearer the camera than the car's
-side shows its edge about 0.14 m beyond the face (the nose touches the face short of the
-edge and stops there, in view); a barrier farther away shows it short of the face (the nose
-passes in front of it and stops beyond). Only where the face stands short of the column
-the depth direction vanishes to (a camera looking back at the face) does a nearer edge show
-short of the face, and hide the nose before it touches: a stop at an edge of frame 0 is not
-taken there. The front end is found against the background as
-it was in frame 0, before the car got there (:func:`front_column`), so wall texture and the
-barrier's own edges do not count.
+in the picture is not the face: with the camera short of the face, as usual, a barrier side
+face 0.6 m nearer the camera than the car's side shows its edge about 0.14 m beyond the
+face (the nose touches the face short of the edge and stops there, in view); a barrier
+farther away shows it short of the face (the nose passes in front of it and stops beyond).
+Only where the face stands short of the column the depth direction vanishes to (a camera
+looking back at the face) does a nearer edge show short of the face, and hide the nose
+before it touches: a stop at an edge of frame 0 is not taken there. The front end is found
+against the background as it was in frame 0, before the car got there
+(:func:`front_column`), so wall texture and the barrier's own edges do not count.
 
 Positions are image px (undistorted, with the camera shake taken out, as the body pose);
 times s on the film's clock (0 at frame 0).
@@ -104,8 +104,9 @@ VANISH_MARGIN = 0.15
 #: The front end is followed in frames where the rigid nose stands at least twice this far
 #: beyond its place in frame 0 (the outline's nose, set right by the picture's front to
 #: within NOSE_OFF_PX), looked for from half-way there, or from ``search_px + 2`` px beyond
-#: it once the car is that far on, px
-FRAME0_CLEAR_PX = 4.0
+#: it once the car is that far on, px (the car's grey is measured 1 to 4.5 px behind its
+#: front: COVER_BEHIND)
+FRAME0_CLEAR_PX = 5.0
 #: How far ahead of the vehicle outline's nose the picture's front end is looked for, px.
 LOCATE_PX = 40.0
 #: A picture's front further than this from the outline's nose moves the nose the front
@@ -451,6 +452,11 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         ``row_lag_px(v)`` -> how far the outline at rows ``v`` (the reference frame's, px)
         stands behind the nose's tip, px (NaN where the outline has no front); None: the
         rows' front is the tip.
+    vanish_u : float, optional
+        Column (pose coordinates, px) that the car plane's normal vanishes to: the
+        principal point of a camera square to the car's plane. A stop at an edge of frame 0
+        beyond it by :data:`VANISH_MARGIN` of the width (in the travel direction) is the
+        contact; None: such a stop is not taken.
 
     Returns
     -------
@@ -485,6 +491,8 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     # stand a few cm off the car's), once, in the first frame where the car has left its
     # place in frame 0 far enough; the nose is moved by it
     near = idx[idx >= int(np.floor((guess_s - LEVEL_BEFORE_S) * fps))]
+    if not len(near):
+        return not_seen("too few frames around the deceleration onset")
     located = _locate_front(frame_at, near, pose, nose_ref, nose0, (v0, v1), d, background, to_pose, search_px)
     if isinstance(located, str):
         return not_seen(located)
@@ -561,17 +569,19 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         # can be (debris flung towards the camera shows beyond the face): the median row
         median = series[0.5]
         by_median = stop_time(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
+        if by_median is not None and by_median[3] < MIN_CHI2_GAIN and found is not None:
+            by_median = None  # the median rows do not stop: as if no clean stop
         if by_median is not None or found is None:
             u_seen, s_seen, lag = median
             found = by_median
         else:
-            # no clean stop in the median rows: the most forward rows' stop stands; what
-            # joined the front came with the contact or after it, so the contact lies
-            # before the first frame that shows it, and after the frame before that
+            # no clean stop in the median rows: the most forward rows' stop stands, its
+            # sigma widened: what joined the front came with the contact or after it, so
+            # the contact lies before the first frame that shows it (or a frame before)
             late_s = max(found[0] - t_ahead, 0.0) + 1.0 / fps
             joined = (f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car "
-                      f"can be (debris, or something else joined to it), and their median shows no clean stop: the stop may be up to "
-                      f"{late_s * 1e3:.2f} ms late, which the sigma counts")
+                      "can be (debris, or something else joined to it), and their median shows no clean stop: "
+                      f"the stop may be up to {late_s * 1e3:.2f} ms late, which the sigma counts")
     which = ", neither in its most forward rows nor in their median," if joined else ""
     if found is None:
         return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "

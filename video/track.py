@@ -208,7 +208,7 @@ def _contact_in_picture(film, frame_t, pose, cg_uv, axes: np.ndarray, car: CarGe
         return not_seen(placed)
     nose, rows, row_lag_px = placed
     return see_contact(film.__getitem__, frame_t, pose, nose, rows, d, onset_s, to_pose=to_pose,
-                       row_lag_px=row_lag_px, vanish_u=float(lens.centre[0]))
+                       row_lag_px=row_lag_px, vanish_u=float(to_pose(0, lens.centre[None])[0, 0]))
 
 
 def nose_in_picture(car: CarGeometry, cg_uv: np.ndarray, axes: np.ndarray, s: float):
