@@ -138,10 +138,17 @@ def _drawn_film(stop_frame=20.4, v=-2.5, n=50, direction=-1, barrier_from=None, 
     return frames, pose, np.array([nose0, 40.0])
 
 
-def test_a_car_seen_stopping_gives_the_contact_between_frames():
-    frames, pose, nose = _drawn_film()
+def _see_drawn(guess_s, **kwargs):
+    """``see_contact`` on a :func:`_drawn_film` (its keyword arguments) over the nose's rows
+    20-60, the car travelling to the left; ``vanish_u`` goes to ``see_contact``."""
+    vanish_u = kwargs.pop("vanish_u", None)
+    frames, pose, nose = _drawn_film(**kwargs)
     t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    return see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=guess_s, vanish_u=vanish_u)
+
+
+def test_a_car_seen_stopping_gives_the_contact_between_frames():
+    seen = _see_drawn(0.024)
     assert seen.kind == "seen"
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
     assert 0.0 < seen.sigma_s <= 2e-3
@@ -153,9 +160,7 @@ def test_debris_joined_to_the_front_in_a_third_of_the_rows_does_not_move_the_con
     # forward share would stop where the fragment stands (frame 22.2); 3 px ahead of the
     # rigid front end in frame 21, where the car cannot be, it is told and the rows'
     # median followed
-    frames, pose, nose = _drawn_film(debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0))
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    seen = _see_drawn(0.024, debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0))
     assert seen.kind == "seen" and "debris, or something else joined to it" in seen.note
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
 
@@ -178,9 +183,7 @@ def test_debris_with_no_clean_stop_in_the_median_rows_widens_the_sigma(monkeypat
 
     median_without_stop.__wrapped__ = cs.stop_time
     monkeypatch.setattr(cs, "stop_time", median_without_stop)
-    frames, pose, nose = _drawn_film(debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0))
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    seen = _see_drawn(0.024, debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0))
     assert len(calls) == 2 and seen.kind == "seen" and "may be up to" in seen.note
     assert seen.time_s == pytest.approx(0.0222, abs=0.3e-3)
     assert seen.sigma_s >= 0.0016 and abs(seen.time_s - 0.0204) <= 1.5 * seen.sigma_s
@@ -189,9 +192,7 @@ def test_debris_with_no_clean_stop_in_the_median_rows_widens_the_sigma(monkeypat
 def test_a_deceleration_onset_guessed_19_ms_late_still_frames_the_stop():
     # a soft front's deceleration rises late: the front end is followed from 30 ms before
     # the guess, so the stop at frame 20.4 has its frames of moving with the cell before it
-    frames, pose, nose = _drawn_film()
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.039)
+    seen = _see_drawn(0.039)
     assert seen.kind == "seen"
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
 
@@ -199,9 +200,7 @@ def test_a_deceleration_onset_guessed_19_ms_late_still_frames_the_stop():
 def test_an_onset_guessed_past_the_frames_is_not_seen_without_an_error():
     # 50 frames; an onset guessed at 70.5 ms leaves frames 40-49 around it, none of them
     # from 20 ms before the guess on, where the nose is placed
-    frames, pose, nose = _drawn_film()
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.0705)
+    seen = _see_drawn(0.0705)
     assert seen.kind == "not_seen" and "too few frames" in seen.note
 
 
@@ -233,18 +232,14 @@ def test_a_front_end_at_the_pictures_border_is_not_taken_for_the_front():
 def test_a_stop_without_frames_of_the_front_end_moving_before_it_is_not_seen():
     # the front end can be told from frame 0's background only once it has moved past where
     # it stood there: a stop 6 px on leaves no frame of it moving with the cell
-    frames, pose, nose = _drawn_film(stop_frame=2.4)
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.006)
+    seen = _see_drawn(0.006, stop_frame=2.4)
     assert seen.kind == "not_seen"
 
 
 def test_a_stop_soon_after_the_front_end_clears_its_place_in_frame_0_is_seen():
     # 21 px on (frame 8.4): the frames from 8 px on show the front end moving with the cell
     # (a car 1.2 px a frame on a far camera reaches the face 18 frames after frame 0)
-    frames, pose, nose = _drawn_film(stop_frame=8.4)
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.012)
+    seen = _see_drawn(0.012, stop_frame=8.4)
     assert seen.kind == "seen"
     assert seen.time_s == pytest.approx(0.0084, abs=0.3e-3)
 
@@ -280,9 +275,7 @@ def test_a_camera_shaken_by_the_impact_is_taken_out_of_the_front_end():
 
 def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping():
     # the front end vanishes into the barrier's grey at column 175 (frame 22) and goes on
-    frames, pose, nose = _drawn_film(stop_frame=np.inf, barrier_from=175)
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    seen = _see_drawn(0.024, stop_frame=np.inf, barrier_from=175)
     # the car is followed on over the barrier's grey where it differs from it, and lost where
     # it does not: no stop is claimed at the barrier's edge
     assert seen.kind == "not_seen" and "does not stop" in seen.note
@@ -294,9 +287,7 @@ def test_a_car_going_behind_a_barrier_nearer_the_camera_is_not_seen_stopping(van
     # it stops there, though it never touched anything. A nearer edge can show short of the
     # face only where the face stands short of the column the depth direction vanishes to
     # (the car travels to the left: a column left of 175, or within the margin of it)
-    frames, pose, nose = _drawn_film(stop_frame=np.inf, occluder_from=175)
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024, vanish_u=vanish_u)
+    seen = _see_drawn(0.024, stop_frame=np.inf, occluder_from=175, vanish_u=vanish_u)
     assert seen.kind == "not_seen" and "cannot be told from going behind it" in seen.note
 
 
@@ -305,9 +296,7 @@ def test_a_stop_at_an_edge_beyond_the_column_the_depth_direction_vanishes_to_is_
     # (the camera square to the car's plane at column 260 of 300): a nearer barrier's edge
     # would show beyond the face there, so the front end standing at the edge is the face
     # in the car's plane, reached at frame (230 - 175) / 2.5 = 22
-    frames, pose, nose = _drawn_film(stop_frame=np.inf, occluder_from=175)
-    t = np.arange(len(frames)) / FPS
-    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024, vanish_u=260.0)
+    seen = _see_drawn(0.024, stop_frame=np.inf, occluder_from=175, vanish_u=260.0)
     assert seen.kind == "seen" and "at an edge of frame 0" in seen.note
     assert seen.time_s == pytest.approx(0.022, abs=0.3e-3)
 
