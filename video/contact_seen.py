@@ -429,7 +429,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     Parameters
     ----------
     frame_at : callable
-        ``frame_at(i)`` -> frame ``i`` of the film (read in increasing order).
+        ``frame_at(i)`` -> frame ``i`` of the film (read once each, in increasing order).
     t : (n,) s
         Film clock of every frame.
     pose : BodyPose
@@ -561,9 +561,9 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         joined = "; the rows' median front is followed, their most forward ones showing no clean stop"
     else:
         ahead_px, t_ahead = _joined_ahead(t[idx], u_rigid, u_seen, s_seen, found[0], d)
-        joined = "" if not ahead_px else (
-            f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car can be "
-            "(debris, or something else joined to it): the rows' median front is followed")
+        stood = (f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car can "
+                 "be (debris, or something else joined to it)")
+        joined = f"{stood}: the rows' median front is followed" if ahead_px else ""
     if joined:
         # something joined the front in its most forward rows, ahead of where the car
         # can be (debris flung towards the camera shows beyond the face): the median row
@@ -579,9 +579,8 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
             # sigma widened: what joined the front came with the contact or after it, so
             # the contact lies before the first frame that shows it (or a frame before)
             late_s = max(found[0] - t_ahead, 0.0) + 1.0 / fps
-            joined = (f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car "
-                      "can be (debris, or something else joined to it), and their median shows no clean stop: "
-                      f"the stop may be up to {late_s * 1e3:.2f} ms late, which the sigma counts")
+            joined = (f"{stood}, and their median shows no clean stop: the stop may be up to "
+                      f"{late_s * 1e3:.2f} ms late, which the sigma counts")
     which = ", neither in its most forward rows nor in their median," if joined else ""
     if found is None:
         return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "
