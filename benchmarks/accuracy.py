@@ -41,7 +41,7 @@ import numpy as np
 from synth.world import EFFECTS
 
 SEED_BASE = 910_000   # benchmark seeds; tests use seeds below 1000
-CALIBRATION_SEED_BASE = 950_000   # the worlds identify/model_error.json is calibrated on (--calibration)
+CALIBRATION_SEED_BASE = 950_000   # the worlds identify/fitting/model_error.json is calibrated on (--calibration)
 # 40 worlds: clean and each effect, interleaved so that a short run (--n) sees a mix
 SCHEDULE = ("clean", "stiffness_zone", "clean", "front_wheel_block", "clean", "rate_dependence",
             "clean", "engine_impact", "rear_axle_lift")

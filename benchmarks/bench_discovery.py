@@ -2,7 +2,7 @@
 ``python benchmarks/bench_discovery.py [FILM ...]``, default: the demonstration films).
 
 For each film, in one process: reading and tracking the film, the base fit through the
-superset model (``identify.discovery.fit_base``, includes the one compile that every later
+superset model (``identify.discover.loop.fit_base``, includes the one compile that every later
 fit shares), then ``discover`` (candidate fits, held-out checks, residual analysis), and
 the same discovery on a second call (everything compiled) as the steady-state figure.
 Printed as wall times and as the ratio of the discovery to the 60 s budget of the issue
@@ -22,9 +22,9 @@ jax.config.update("jax_enable_x64", True)
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from identify.discovery import discover, fit_base  # noqa: E402
+from identify.discover.loop import discover, fit_base  # noqa: E402
 from identify.identification import car_geometry_of, free_parameters  # noqa: E402
-from identify.recording import load_recording  # noqa: E402
+from identify.recordings.load import load_recording  # noqa: E402
 from sim import load_vehicle  # noqa: E402
 
 BUDGET_S = 60.0

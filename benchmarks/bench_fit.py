@@ -4,7 +4,7 @@ The same identification done two ways on one synthetic measurement of the Audi A
 (``paper_identified`` truth, 56.3 km/h, x and z with 2 mm noise, pitch with 0.2 degree
 noise, -20 to 300 ms at 1000 fps, measured impact speed off by one sigma):
 
-(a) ours: ``identify.fitting.fit`` (optimistix Levenberg-Marquardt, forward-mode Jacobians
+(a) ours: ``identify.fitting.collision_fit.fit`` (optimistix Levenberg-Marquardt, forward-mode Jacobians
     through the JAX model), timed once with its compile and again after compile, with one
     start (V-SIM's defaults, like the baseline) and with the five starts ``identify fit``
     uses;
@@ -44,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from helpers import synthetic_measurement  # noqa: E402
 from numpy_model import simulate_numpy, vehicle_numbers  # noqa: E402
 
-from identify.fitting import FitOptions, fit  # noqa: E402
+from identify.fitting.collision_fit import FitOptions, fit  # noqa: E402
 from sim import load_vehicle, named_params  # noqa: E402
 
 SPEED = 56.3 / 3.6  # m/s

@@ -35,7 +35,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from identify.synthetic import car_geometry  # noqa: E402
+from identify.recordings.synthetic import car_geometry  # noqa: E402
 from video.errors import VideoError  # noqa: E402
 from video.io import open_film  # noqa: E402
 from synth.render import Renderer, read_truth, write_film  # noqa: E402

@@ -1,17 +1,17 @@
 """Measure the collision model's own error on calibration worlds and write
-``identify/model_error.json`` (run by hand):
+``identify/fitting/model_error.json`` (run by hand):
 
     python benchmarks/accuracy.py --calibration --effect clean --n 16 --format isomme --json cal.json
     python benchmarks/accuracy.py --calibration --effect clean --n 24 --format film --json cal_film.json
     python benchmarks/calibrate_model_error.py cal.json cal_film.json [--dry-run]
 
-One table per kind of recording (film, sensors: ``identify.model_error.KINDS``); a kind the
+One table per kind of recording (film, sensors: ``identify.fitting.model_error.KINDS``); a kind the
 given runs do not have keeps the table it had.
 
 For each parameter of ``SCALE_OF``, the fits' errors against the world's truth and the fits'
 own standard deviations (the data's alone, ``std_data``) give the model-form standard
 deviation that makes the errors' mean square one combined standard deviation
-(``identify.model_error.calibrate``): relative for a stiffness, a mass and the speed,
+(``identify.fitting.model_error.calibrate``): relative for a stiffness, a mass and the speed,
 absolute for the restitution and the engine's gap. Only values the fit reported identified
 count (the term is to make what the tool claims cover the truth), only clean worlds fitted
 without a refusal (a concealed effect is discovery's to find, not the model error's to hide),
@@ -32,8 +32,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
-from identify.fitting import NOT_IDENTIFIED, spread_of  # noqa: E402
-from identify.model_error import TABLE_FILE, calibrate  # noqa: E402
+from identify.fitting.collision_fit import NOT_IDENTIFIED, spread_of  # noqa: E402
+from identify.fitting.model_error import TABLE_FILE, calibrate  # noqa: E402
 
 FORMAT_KIND = {"film": "film", "isomme": "sensors"}  # accuracy.py's --format -> model_error.KINDS
 

@@ -1,7 +1,14 @@
 """identify: crash-test recordings in, collision-model parameters out.
 
-The glue between ``video`` (film -> measured motion) and ``sim`` (the collision model):
-reading recordings, fitting, results and the command line (``identify.cli``).
+The glue between ``video`` (film -> measured motion) and ``sim`` (the collision model).
+``identification.fit`` runs the flow, one subpackage a stage:
+
+    recordings ──▶ Measurement ──fitting──▶ FitResult ──discover──▶ discoveries ──report──▶ result.json,
+    (film, tracks.csv,           (parameters,            (named mechanisms               report.md,
+     EV5, ISO-MME)                uncertainty)            or "unexplained")               figures
+
+``sensitivity`` (``identify sensitivity``) asks how a reconstruction depends on its inputs;
+``cli`` and ``commands/`` are the command line.
 
     import identify
     ident = identify.fit("crash.mp4", "audi_a4")      # what `identify fit` does
@@ -15,8 +22,8 @@ from identify.errors import UserError as UserError
 _LAZY = {
     "Identification": "identify.identification",
     "fit": "identify.identification",
-    "Measurement": "identify.measurement",
-    "load_recording": "identify.recording",
+    "Measurement": "identify.recordings.measurement",
+    "load_recording": "identify.recordings.load",
 }
 
 

@@ -91,7 +91,7 @@ def _run_in_worker(func, args):
         while worker.is_alive():
             worker.join(0.05)
     except KeyboardInterrupt:
-        from identify.results import discard_temporaries
+        from identify.report.results import discard_temporaries
 
         discard_temporaries()
         try:
@@ -134,7 +134,7 @@ def _main(argv: list[str] | None) -> int:
             return int(_run_in_worker(args.func, args) or 0)
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
-        from identify.results import discard_temporaries
+        from identify.report.results import discard_temporaries
 
         discard_temporaries()
         print(f"identify {args.command}: interrupted", file=sys.stderr)

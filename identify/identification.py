@@ -1,6 +1,6 @@
 """``identify.fit``: from a recording to parameters, a result document and a results folder.
 
-The flow: recording (``identify.recording``) -> Measurement -> fit (``identify.fitting``)
+The flow: recording (``identify.recordings.load``) -> Measurement -> fit (``identify.fitting.collision_fit``)
 -> result.json, tracks.csv, plots and report.md (written atomically).
 """
 
@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from identify.errors import UserError
-from identify.fitting import FitOptions, FitResult, fit as fit_measurement
-from identify.recording import Recording, load_recording
-from identify.results import ResultsFolder, default_output_folder as default_output_folder
+from identify.fitting.collision_fit import FitOptions, FitResult, fit as fit_measurement
+from identify.recordings.load import Recording, load_recording
+from identify.report.results import ResultsFolder, default_output_folder as default_output_folder
 
 COLLISION_PARAMETERS = ("k_compression", "k_restitution", "restitution", "dz_contact")
 
@@ -25,11 +25,11 @@ class Identification:
     """What ``identify.fit`` returns.
 
     document : the result.json content (dict).
-    fit : identify.fitting.FitResult (values, covariance, trajectory, predictions ...).
-    recording : identify.recording.Recording (the measurement, and a film's tracks).
+    fit : identify.fitting.collision_fit.FitResult (values, covariance, trajectory, predictions ...).
+    recording : identify.recordings.load.Recording (the measurement, and a film's tracks).
     vehicle : sim.Vehicle.
     out : the results folder, or None when nothing was written.
-    discovery : identify.discovery.DiscoveryResult, or None with ``discover=False``.
+    discovery : identify.discover.loop.DiscoveryResult, or None with ``discover=False``.
     one_body : FitResult of the one-body base model on the cabin's channels alone, when the
         recording measured a second body (the engine) and has load cells to score both on.
     """
@@ -81,7 +81,7 @@ def free_parameters(measurement, speed_mps: float | None) -> tuple[tuple, dict[s
     with the reason: the impact speed when the user gave it; dz_contact when the recording
     has neither pitch nor height (the force's height shows only there: a sensor recording's
     X accelerometers say nothing of it), held at V-SIM's 0 m."""
-    from identify.model import base_parameters
+    from identify.fitting.model import base_parameters
 
     free, held = base_parameters(), {}
     if speed_mps is not None:
@@ -188,7 +188,7 @@ def _nuisance_entry(fr: FitResult, name: str) -> dict:
 
 def _std_entry(fr: FitResult, name: str) -> dict:
     """A fitted quantity's standard deviations: ``std`` (what to quote), and its two parts,
-    the data's ``std_data`` and the model's own error ``std_model`` (``identify.model_error``)."""
+    the data's ``std_data`` and the model's own error ``std_model`` (``identify.fitting.model_error``)."""
     return {"std": fr.std[name], "std_data": fr.std_data.get(name, fr.std[name]), "std_model": fr.std_model.get(name, 0.0)}
 
 
@@ -201,11 +201,11 @@ def _unit(name):
 def write_results(out, ident: Identification, default_traj) -> Path:
     """Write the results folder atomically: result.json, tracks.csv, PNGs, report.md.
 
-    ``out`` is a path or an open :class:`identify.results.ResultsFolder` (created before
+    ``out`` is a path or an open :class:`identify.report.results.ResultsFolder` (created before
     the work started, so that an unwritable place fails at once)."""
-    from identify import plots
-    from identify.report import render_report
-    from identify.results import ResultsFolder, dumps
+    from identify.report import plots
+    from identify.report.markdown import render_report
+    from identify.report.results import ResultsFolder, dumps
     from sim import named_params
 
     fr, rec, vehicle = ident.fit, ident.recording, ident.vehicle
@@ -214,7 +214,7 @@ def write_results(out, ident: Identification, default_traj) -> Path:
     with folder as tmp:
         forces = []
         if rec.sensor_test is not None and rec.sensor_test.barrier:
-            from identify.force_check import force_check_document
+            from identify.report.force_check import force_check_document
 
             start = ident.discovery.start if ident.discovery is not None else None
             base, base_label = None, "base model, before discovery"
@@ -222,7 +222,7 @@ def write_results(out, ident: Identification, default_traj) -> Path:
                 base, base_label = (ident.one_body.trajectory, ident.one_body.contact_time), "one-body base model"
             elif start is not None and fr.model != start.model:
                 base = (start.trajectory, start.contact_time)
-            from identify.candidates.engine_impact import ENGINE_MASS_FRACTION, engine_typical
+            from identify.discover.candidates.engine_impact import ENGINE_MASS_FRACTION, engine_typical
 
             engine_mass = (engine_typical(vehicle)["engine_impact.engine_mass"],
                            "the vehicle file's" if vehicle.engine_mass is not None
@@ -251,7 +251,7 @@ def write_results(out, ident: Identification, default_traj) -> Path:
         if overlay is not None:
             figures.append(overlay.name)
         if ident.discovery is not None:
-            from identify.discovery_plots import plot_discovery
+            from identify.discover.plots import plot_discovery
 
             figures += plot_discovery(ident.discovery, tmp, vehicle)
         figures += forces
@@ -305,9 +305,9 @@ def fit(
     tape_segment : m, one reference-tape segment.
     speed_kmh : impact speed if known (held fixed); else measured.
     out : results folder (default ``<recording stem>.identify/`` beside it), or an
-        ``identify.results.ResultsFolder`` made already; ``write=False`` writes nothing.
+        ``identify.report.results.ResultsFolder`` made already; ``write=False`` writes nothing.
     discover : look for physics the base model left out.
-    options : identify.fitting.FitOptions.
+    options : identify.fitting.collision_fit.FitOptions.
     progress : callable taking a one-line status string, or None.
     force : fit even when the film contradicts the vehicle file (wheelbase, length); the
         result then carries the contradiction in ``"warnings"``.
@@ -354,18 +354,18 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
                          speed_mps=speed_mps, progress=video_progress)  # fmt: skip
     warnings = []
     if rec.tracks is not None:
-        from identify.consistency import check_film_against_vehicle
+        from identify.recordings.consistency import check_film_against_vehicle
 
         warnings = check_film_against_vehicle(rec.tracks, veh, vehicle_label(vehicle), force=force)
         for w in warnings:
             say(f"warning: {w}")
-    from identify.wheel_spin import without_spinning_wheels
+    from identify.fitting.wheel_spin import without_spinning_wheels
 
     rec = dataclasses.replace(rec, measurement=without_spinning_wheels(rec.measurement, float(veh.wheel_radius)))
     free, held = free_parameters(rec.measurement, speed_mps)
     found = None
     if discover:
-        from identify.discovery import CANDIDATE_FIT, discover as discover_missing, fit_base
+        from identify.discover.loop import CANDIDATE_FIT, discover as discover_missing, fit_base
 
         say("fitting the collision model (the first run compiles it: ~20 s)")
         base_options = dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver)
@@ -377,10 +377,10 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         one_body = _one_body_reference(rec, veh, free, base_options, speed_mps, say)
     else:
         say("fitting the collision model (the first run compiles it: ~15 s)")
-        from identify.candidates import measured_effects
+        from identify.discover.candidates import measured_effects
 
         if measured_effects(rec.measurement):  # a second measured body (the engine) is part of the base model
-            from identify.discovery import fit_base
+            from identify.discover.loop import fit_base
 
             fr = fit_base(rec.measurement, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
         else:
@@ -458,8 +458,8 @@ def second_body_doubts(fr, one_body) -> tuple[str, dict[str, str]]:
       motion does not bear out describes the model's compromise (on reference world 300,
       whose engine never reaches the barrier, the two-body fit put the gap at 0.27 +- 0.02 m,
       truth 0.67 m)."""
-    from identify.discovery import bic, round_tau
-    from identify.residuals import channel_chi2
+    from identify.discover.loop import bic, round_tau
+    from identify.fitting.residuals import channel_chi2
 
     if one_body is None or "engine_vx_mps" not in fr.predictions:
         return "", {}
@@ -498,8 +498,8 @@ def _one_body_reference(rec, veh, free, options, speed_mps, say):
     """The one-body base model fitted to the cabin's channels alone, when the recording
     measured the engine too (so the fitted model has two bodies) and has load cells that
     can score both; else None."""
-    from identify.candidates import measured_effects
-    from identify.discovery import fit_base
+    from identify.discover.candidates import measured_effects
+    from identify.discover.loop import fit_base
 
     m = rec.measurement
     if not measured_effects(m) or rec.sensor_test is None or not rec.sensor_test.barrier:

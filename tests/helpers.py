@@ -32,8 +32,8 @@ def synthetic_measurement(vehicle, params, speed=56.3 / 3.6, contact_time=0.0004
     -> sigma in its unit) and a measured impact speed off by one sigma."""
     import jax.numpy as jnp
 
-    from identify.measurement import Measurement
-    from identify.model import predict
+    from identify.recordings.measurement import Measurement
+    from identify.fitting.model import predict
     from sim import simulate
 
     t = np.arange(t_ms[0], t_ms[1] + 1) * 1e-3

@@ -201,7 +201,7 @@ def test_wrong_vehicle_file_stops_before_the_fit(tmp_path, capfd):
 
 
 def test_consistency_thresholds():
-    from identify.consistency import contradictions
+    from identify.recordings.consistency import contradictions
 
     geo = {"hub_spacing_m": 2.808, "hub_spacing_sigma_m": 0.0002, "outline_length_m": 4.70,
            "outline_length_sigma_m": 0.01}  # fmt: skip
@@ -220,7 +220,7 @@ def test_the_wheelbase_decides_and_an_outline_length_alone_only_warns():
     # wheelbase that agrees it is a warning; it stops the run only where no hubs were seen
     from types import SimpleNamespace
 
-    from identify.consistency import check_film_against_vehicle
+    from identify.recordings.consistency import check_film_against_vehicle
     from identify.errors import UserError
 
     veh = SimpleNamespace(wheelbase=2.808, length=4.703)

@@ -39,7 +39,7 @@ def test_result_json_has_the_interface_fields(fitted_folder):
         p = doc["parameters"][name]
         assert p["unit"] == unit and p["std_data"] > 0 and p["std"] == pytest.approx(np.hypot(p["std_data"], p["std_model"]))
         # the data fix all four; the model's own error on recordings it did not make leaves
-        # k_restitution (35 % on films, identify/model_error.json) not identified
+        # k_restitution (35 % on films, identify/fitting/model_error.json) not identified
         assert p["identified"] is (name != "k_restitution"), (name, p.get("reason"))
     assert "model's own error" in doc["parameters"]["k_restitution"]["reason"]
     assert doc["fit"]["model"] == "base"  # how good the fit is, is measured on the reference world
@@ -128,7 +128,7 @@ def test_vehicle_file_missing_a_field_is_named(tmp_path, capsys):
 
 def test_film_that_ends_before_contact_is_one_clear_error(tmp_path, capsys):
     # 40 frames of the car approaching at 15 m/s; the film stops before it reaches the barrier.
-    from identify.synthetic import render_crash
+    from identify.recordings.synthetic import render_crash
 
     t = np.arange(4) / 1000.0
     approach = {"t": t, "x": 15.0 * t, "z": 0 * t, "pitch": 0 * t, "crush": 0 * t,
@@ -148,7 +148,7 @@ def test_rerun_into_its_results_folder_keeps_the_users_files(fitted_folder):
     import os
     import stat
 
-    from identify.results import MANIFEST
+    from identify.report.results import MANIFEST
 
     manifest = json.loads((fitted_folder / MANIFEST).read_text())["files"]
     assert "result.json" in manifest and "report.md" in manifest

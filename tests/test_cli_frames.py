@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from identify.cli import main
-from identify.synthetic import car_geometry, load_vehicle_dict
+from identify.recordings.synthetic import car_geometry, load_vehicle_dict
 from synth.render import Renderer, write_film
 from synth.scene import Effects, Motion, Scene, default_camera, default_tapes, default_targets
 
@@ -91,7 +91,7 @@ def test_refuses_a_non_empty_output_folder(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_scaled_frames_count_time_from_the_measured_contact(tmp_path, capsys):
-    from identify.synthetic import analytic_trajectory, render_crash
+    from identify.recordings.synthetic import analytic_trajectory, render_crash
 
     meta = render_crash("audi_a4", analytic_trajectory(speed=15.0, duration=0.03), tmp_path / "c.mp4",
                         frames_before=12, width=640, height=320)

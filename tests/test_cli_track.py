@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from identify.cli import main
-from identify.synthetic import car_geometry
+from identify.recordings.synthetic import car_geometry
 from synth.render import Renderer, write_film
 from synth.scene import Motion, Scene, default_camera, default_tapes, default_targets
 

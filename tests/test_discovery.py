@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from helpers import NOISE, synthetic_measurement
-from identify.discovery import DiscoveryResult, discover, fit_base, plot_discovery
-from identify.fitting import FitOptions
+from identify.discover.loop import DiscoveryResult, discover, fit_base, plot_discovery
+from identify.fitting.collision_fit import FitOptions
 from sim import FrontWheelBlock, events_ms, named_params, simulate
 
 SPEED = 56.3 / 3.6
@@ -52,7 +52,7 @@ def unexplained_case(a4):
     """No mechanism of the library: after the car has left the barrier (~150 ms) a pulse
     of 15 kN over +-20 ms around 200 ms pulls it back (a snagged cable, say): added to the
     recorded x as the displacement it gives the car's mass."""
-    from identify.missing_force import hat_responses
+    from identify.discover.missing_force import hat_responses
 
     m = synthetic_measurement(a4, named_params("paper_identified"), seed=13)
     _, resp = hat_responses(m.t, np.array([0.200]), 0.020, float(a4.mass))
@@ -93,7 +93,7 @@ def test_a_candidate_a_generic_force_explains_far_better_is_not_named(a4, block_
     """The wiring of ``shape_check`` (its thresholds: tests/test_discovery_rules.py): on the
     blocking recording, a generic missing force made to explain the misfit far better than
     blocking does (10 times its BIC gain) turns the named finding into none, with the reason."""
-    import identify.discovery as discovery
+    import identify.discover.loop as discovery
 
     _, m, found = block_case
     gain = -next(t.delta_bic for t in found.rounds[0] if t.effect == "front_wheel_block")

@@ -2,10 +2,10 @@
 hand-made inputs (no fit, no model: what would change the decision is set directly), so a
 rule inverted or removed fails a test here:
 
-- the BIC gate and the order of candidates (:func:`identify.discovery.choose`);
+- the BIC gate and the order of candidates (:func:`identify.discover.loop.choose`);
 - one effective sample count per round for every candidate (:func:`score`, :func:`round_tau`);
 - the plausibility checks of a candidate's fit (``_plausible``) and the evidence checks
-  against directly measured channels (each candidate's ``evidence``, ``identify.candidates``);
+  against directly measured channels (each candidate's ``evidence``, ``identify.discover.candidates``);
 - the held-out prediction check (``_held_out_chi2``).
 
 Accuracy of discovery on data it did not make is measured on the reference world
@@ -18,11 +18,11 @@ import types
 import numpy as np
 import pytest
 
-from identify.candidates import neutral_values
-from identify.discovery import Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score, shape_check
-from identify.candidates.front_wheel_block import front_wheels_blocked
-from identify.fitting import FitResult
-from identify.measurement import Measurement
+from identify.discover.candidates import neutral_values
+from identify.discover.loop import Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score, shape_check
+from identify.discover.candidates.front_wheel_block import front_wheels_blocked
+from identify.fitting.collision_fit import FitResult
+from identify.recordings.measurement import Measurement
 
 
 def trial(effect, delta_bic):
@@ -152,8 +152,8 @@ def test_a_candidate_with_a_lower_chi2_and_no_more_parameters_never_loses():
 
 
 def test_neutral_values_switch_every_candidate_off_with_its_own_or_the_vehicle_files_value(a4, neutral):
-    from identify.candidates import CANDIDATES
-    from identify.candidates.base import NEVER_REACHED
+    from identify.discover.candidates import CANDIDATES
+    from identify.discover.candidates.base import NEVER_REACHED
 
     assert set(neutral) == {n for c in CANDIDATES for n in c.names}
     assert all(isinstance(v, float) for v in neutral.values())
@@ -326,7 +326,7 @@ def lift_recording(measured_rise_m, model_lift_m=0.05, with_height=True, sigma=0
 
 
 def test_a_rear_hub_seen_rising_with_the_model_supports_rear_lift(a4):
-    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+    from identify.discover.candidates.rear_axle_lift import rear_wheels_lifted
 
     why, seen = rear_wheels_lifted(lift_recording(0.05), a4, (0.0, 100.0))
     assert why == "" and seen.startswith("seen:")
@@ -334,7 +334,7 @@ def test_a_rear_hub_seen_rising_with_the_model_supports_rear_lift(a4):
 
 
 def test_a_rear_hub_seen_on_the_ground_refutes_rear_lift(a4):
-    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+    from identify.discover.candidates.rear_axle_lift import rear_wheels_lifted
 
     why, _ = rear_wheels_lifted(lift_recording(0.0), a4, (0.0, 100.0))
     assert "shows the rear hub on the ground" in why
@@ -344,7 +344,7 @@ def test_a_rear_hub_seen_on_the_ground_refutes_rear_lift(a4):
 
 
 def test_a_rear_lift_no_hub_can_show_is_inferred_not_seen(a4):
-    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+    from identify.discover.candidates.rear_axle_lift import rear_wheels_lifted
 
     # no hub tracked
     why, seen = rear_wheels_lifted(lift_recording(0.0, with_height=False), a4, (0.0, 100.0))
@@ -356,7 +356,7 @@ def test_a_rear_lift_no_hub_can_show_is_inferred_not_seen(a4):
 
 
 def test_three_hub_samples_in_the_window_are_enough_to_judge(a4):
-    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+    from identify.discover.candidates.rear_axle_lift import rear_wheels_lifted
 
     fr = lift_recording(0.05, sigma=1e-5)  # samples every ms: 10, 11 and 12 ms lie in 10-12 ms
     why, seen = rear_wheels_lifted(fr, a4, (10.0, 12.0))
@@ -368,7 +368,7 @@ def test_three_hub_samples_in_the_window_are_enough_to_judge(a4):
 def test_the_hub_is_compared_with_the_lift_on_the_models_clock(a4):
     """The model's clock starts at contact, 2 ms after the recording's zero: a hub that rises
     exactly as the model lifts the wheel, read on that clock, fits it to chi2 0."""
-    from identify.candidates.rear_axle_lift import rear_wheels_lifted
+    from identify.discover.candidates.rear_axle_lift import rear_wheels_lifted
 
     fr = lift_recording(0.0)
     t = np.asarray(fr.trajectory.t)
@@ -479,7 +479,7 @@ def test_a_zone_is_judged_against_the_fitted_base_stiffness(a4):
 def test_the_window_of_blocked_wheels_is_on_the_recording_clock(a4):
     """The model's clock starts at contact, the recording's contact_time (s) later; the window
     is clipped to the recording."""
-    from identify.discovery import effect_window_ms
+    from identify.discover.loop import effect_window_ms
 
     fr = wheel_recording(0.0, 0.2, n=101)  # recording 0-100 ms
     fr.contact_time = 0.00437
@@ -490,14 +490,14 @@ def test_the_window_of_blocked_wheels_is_on_the_recording_clock(a4):
 
 
 def test_every_candidate_module_is_registered_and_discovery_names_none_of_them():
-    """The layout rule (README, Layout): a candidate is one module of identify/candidates,
+    """The layout rule (README, Layout): a candidate is one module of identify/discover/candidates,
     registered by one line; discovery reaches candidates only through their hooks, so its
     source names no effect (no ``if effect == ...`` chains)."""
     import pkgutil
     import re
 
-    import identify.candidates as pkg
-    import identify.discovery
+    import identify.discover.candidates as pkg
+    import identify.discover.loop
 
     modules = {m.name for m in pkgutil.iter_modules(pkg.__path__)} - {"base"}
     assert set(pkg.REGISTRY) == modules
@@ -506,7 +506,7 @@ def test_every_candidate_module_is_registered_and_discovery_names_none_of_them()
         assert c.mechanism is None or c.mechanism.effect == name
         assert {n.split(".", 1)[1] for n in c.names} <= set(c.neutral) and all(set(s) == {n.split(".", 1)[1] for n in c.names} for s in (*c.starts, *c.measured_starts))
         assert set(c.report) == {n.split(".", 1)[1] for n in c.names}
-    source = open(identify.discovery.__file__).read()
+    source = open(identify.discover.loop.__file__).read()
     named = [e for e in pkg.REGISTRY if re.search(rf"[\"']{e}[\"']", source)]
     assert named == []
 
@@ -514,8 +514,8 @@ def test_every_candidate_module_is_registered_and_discovery_names_none_of_them()
 def test_each_candidates_parameters_are_its_mechanisms_fields_in_its_units_and_ranges(a4):
     """A candidate's fitted parameters are read from and written to its ``sim`` mechanism by
     name, reported with the unit the mechanism declares, and start inside their range."""
-    from identify.candidates import CANDIDATES
-    from identify.model import VEHICLE_OVERRIDES
+    from identify.discover.candidates import CANDIDATES
+    from identify.fitting.model import VEHICLE_OVERRIDES
 
     for c in CANDIDATES:
         for p in c.parameters:
@@ -544,8 +544,8 @@ def test_the_candidates_start_from_the_current_models_crush_and_stiffness():
     first front-wheel misfit window after contact starts (crush here 0.5 m/s x t), else where
     the crush reaches the tyre (front overhang - wheel radius); a window before contact, on
     another channel, or at a crush under 5 cm does not count."""
-    from identify.candidates.front_wheel_block import FRONT_ANGLE, wheels_stop_turning
-    from identify.candidates.stiffness_zone import half_the_crush, twice_the_stiffness
+    from identify.discover.candidates.front_wheel_block import FRONT_ANGLE, wheels_stop_turning
+    from identify.discover.candidates.stiffness_zone import half_the_crush, twice_the_stiffness
 
     t = np.linspace(0.0, 0.2, 201)
     fr = types.SimpleNamespace(trajectory=types.SimpleNamespace(t=t, crush=0.5 * t * (t < 0.16)),

@@ -7,10 +7,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from identify.candidates import measured_effects
-from identify.candidates.engine_impact import ENGINE_GAP_M, ENGINE_MASS_FRACTION, engine_priors, engine_typical
-from identify.discovery import _plausible
-from identify.fitting import FitResult
+from identify.discover.candidates import measured_effects
+from identify.discover.candidates.engine_impact import ENGINE_GAP_M, ENGINE_MASS_FRACTION, engine_priors, engine_typical
+from identify.discover.loop import _plausible
+from identify.fitting.collision_fit import FitResult
 from identify.identification import _second_body_notes
 
 
@@ -82,7 +82,7 @@ def test_a_sensor_recording_without_engine_channels_says_what_it_cannot_tell():
 
 def _cabin_fit(x_error_m, names, k_compression, with_engine):
     """A fit whose cabin x misses by +-x_error_m in turn over 200 samples of sigma 1 mm."""
-    from identify.measurement import Measurement
+    from identify.recordings.measurement import Measurement
 
     n = 200
     t = np.linspace(0.0, 0.2, n)
@@ -167,7 +167,7 @@ def test_a_cabin_improvement_the_five_engine_parameters_do_not_pay_for_is_a_warn
 
 
 def test_an_engine_that_never_touches_the_barrier_leaves_its_gap_and_block_unidentified():
-    from identify.candidates.engine_impact import unseen_without_a_hit
+    from identify.discover.candidates.engine_impact import unseen_without_a_hit
 
     traj = SimpleNamespace(engine_force=np.zeros(3), engine_x=np.array([0.0, 0.42, 0.71]))
     out = unseen_without_a_hit(SimpleNamespace(trajectory=traj))
@@ -183,7 +183,7 @@ def test_what_the_crash_cannot_show_is_marked_on_the_final_fit_whatever_it_was_b
     a reason already there is kept and the new one added."""
     import dataclasses
 
-    from identify.discovery import _final
+    from identify.discover.loop import _final
     from sim import make_params
 
     values = {"engine_impact.engine_mass": 180.0, "engine_impact.gap": 1.15, "engine_impact.k_engine": 3e6,
@@ -205,8 +205,8 @@ def test_only_a_measured_engine_is_also_started_out_of_the_barriers_reach(a4):
     """The far start finds a measured engine that never hits (reference world 910000: x RMS
     4.7 mm against 13 mm from the typical gap); a discovery candidate that never hits is no
     finding, so discovery does not spend a fit on it."""
-    from identify.candidates import BY_EFFECT, starting_guesses
-    from identify.candidates.engine_impact import GAP_OUT_OF_REACH_M
+    from identify.discover.candidates import BY_EFFECT, starting_guesses
+    from identify.discover.candidates.engine_impact import GAP_OUT_OF_REACH_M
 
     engine = BY_EFFECT["engine_impact"]
     assert [g["engine_impact.gap"] for g in starting_guesses(engine, None, a4)] == [0.35]  # audi_a4.toml

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from helpers import synthetic_measurement
-from identify.fitting import fit, log_scale_identifiability
-from identify.model_error import NONE, table
+from identify.fitting.collision_fit import fit, log_scale_identifiability
+from identify.fitting.model_error import NONE, table
 from sim import named_params
 
 TRUTH = {"k_compression": 970e3, "k_restitution": 600e3, "restitution": 0.17, "dz_contact": -0.21}
@@ -89,7 +89,7 @@ def test_force_height_not_identified_from_compression_alone_without_pitch(a4, pa
 
 
 def test_autocorrelation_time_is_one_for_white_noise_and_grows_with_correlation():
-    from identify.least_squares import integrated_autocorrelation_time
+    from identify.fitting.least_squares import integrated_autocorrelation_time
 
     rng = np.random.default_rng(3)
     white = rng.normal(size=2000)
@@ -125,7 +125,7 @@ def _white_part(m):
 def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement):
     # One Levenberg-Marquardt step from V-SIM's defaults leave the fit far from the data.
     from identify.errors import UserError
-    from identify.fitting import FitOptions
+    from identify.fitting.collision_fit import FitOptions
 
     with pytest.raises(UserError, match="did not converge"):
         fit(paper_measurement, a4, options=FitOptions(starts=1, max_steps=1))
@@ -143,14 +143,14 @@ def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement):
     ("log", {"scale": 1e6}, 0.9e9, ""),
 ])
 def test_a_value_within_one_percent_of_a_bound_is_at_its_bound(transform, kw, value, words):
-    from identify.model import FreeParameter
+    from identify.fitting.model import FreeParameter
 
     where = FreeParameter("p", "m", transform, **kw).at_bound(value)
     assert (where.startswith(words) if words else where == ""), where
 
 
 def test_a_log_scale_parameter_known_to_no_better_than_20_percent_is_not_identified():
-    from identify.model import FreeParameter
+    from identify.fitting.model import FreeParameter
 
     free = (FreeParameter("engine_impact.k_rear", "N/m", "log", scale=1e6),
             FreeParameter("engine_impact.k_engine", "N/m", "log", scale=1e6),
@@ -171,7 +171,7 @@ def test_a_log_scale_parameter_known_to_no_better_than_20_percent_is_not_identif
 def test_a_second_reason_not_to_identify_keeps_the_first():
     from types import SimpleNamespace
 
-    from identify.fitting import FitResult
+    from identify.fitting.collision_fit import FitResult
 
     fr = SimpleNamespace(identified={"k_restitution": (False, "not identified (std 108 %): the motion barely changes")})
     FitResult.mark_not_identified(fr, "k_compression", "not identified: it depends on the model")
@@ -185,7 +185,7 @@ def test_a_second_reason_not_to_identify_keeps_the_first():
 def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_measurement):
     """The recording's clock 25 ms off (contact at -25 ms, the model allows +-10 ms): the fit
     parks the contact time at its bound, and must not report that value as measured."""
-    from identify.fitting import FitOptions
+    from identify.fitting.collision_fit import FitOptions
 
     late = dataclasses.replace(paper_measurement, t=paper_measurement.t - 0.025)
     r = fit(late, a4, model_error=NONE, options=dataclasses.replace(FitOptions(), starts=1))  # the same compile as the others
@@ -217,7 +217,7 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
     assert pull["conflict"] and pull["pull"] == pytest.approx(r.values["contact_time"] / 0.001)
     assert 0.004 < r.values["contact_time"] < 0.0055  # the motion still decides (4.4 ms measured)
     # the report and the console say it in the reader's units, the measurements first
-    from identify.report import prior_lines
+    from identify.report.markdown import prior_lines
 
     lines = prior_lines(r.pulls())
     assert lines[0].startswith("first contact: measured 0 +- 1 ms, fitted 4.") and "conflict" in lines[0]
@@ -238,7 +238,7 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
 def test_a_films_contact_seen_in_the_picture_enters_the_fit_as_a_measurement():
     """``measurement_from_tracks``: a contact the picture showed comes with its sigma and its
     sub-frame instant; one from the deceleration onset (the fitted motion's own) adds none."""
-    from identify.recording import measurement_from_tracks
+    from identify.recordings.load import measurement_from_tracks
     from video.types import Tracks
 
     t = np.arange(-10, 40) / 1000.0
@@ -253,7 +253,7 @@ def test_a_films_contact_seen_in_the_picture_enters_the_fit_as_a_measurement():
 
 def test_the_calibrated_model_error_is_added_in_quadrature_and_can_decide_identifiability(a4, paper_measurement,
                                                                                          paper_fit):
-    """By default the fit adds the calibrated model error (``identify/model_error.json``) to the
+    """By default the fit adds the calibrated model error (``identify/fitting/model_error.json``) to the
     data's std and to the covariance's diagonal, and a parameter whose model error exceeds its
     limit is not identified, saying so, however well the data fix it."""
     r = fit(paper_measurement, a4)

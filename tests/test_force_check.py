@@ -8,7 +8,7 @@ import pytest
 
 from helpers import cfc_scipy, last_above, raw_10146, raw_ev5_channel
 from identify.errors import UserError
-from identify.force_check import (_dtw_path, check_forces, compare_forces, end_of_contact,
+from identify.report.force_check import (_dtw_path, check_forces, compare_forces, end_of_contact,
                                   engine_mass_matching_the_barrier, force_check_document, iso18571,
                                   measured_force, momentum_check, rigid_body_force, two_body_force)
 from identify.recordings import Channel, SensorTest, contact_time, measurement_from_test, read_isomme, read_nhtsa

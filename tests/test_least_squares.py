@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from identify.least_squares import (
+from identify.fitting.least_squares import (
     channel_residuals,
     integrated_autocorrelation_time,
     parameter_covariance,

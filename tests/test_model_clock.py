@@ -1,4 +1,4 @@
-"""The model seen on the measurement's clock (``identify.model.predict``), against functions
+"""The model seen on the measurement's clock (``identify.fitting.model.predict``), against functions
 whose values between samples are known exactly: a velocity read between the model's 1 ms
 samples must be accurate to its curvature's third order and smooth in the time shift, or a
 fitted contact time is drawn to a whole millisecond (on NHTSA 10146 it ended at 1.0000 ms
@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from identify.model import predict
+from identify.fitting.model import predict
 
 H = 1e-3  # s, the model's output interval
 S = np.arange(0, 201) * H  # model times of the samples

@@ -1,4 +1,4 @@
-"""The model's own error (identify/model_error.py) and its calibration
+"""The model's own error (identify/fitting/model_error.py) and its calibration
 (benchmarks/calibrate_model_error.py), on hand-made numbers."""
 
 import json
@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from identify.model_error import KINDS, NONE, ModelError, calibrate, kind_of, table
+from identify.fitting.model_error import KINDS, NONE, TABLE_FILE, ModelError, calibrate, kind_of, table
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -59,10 +59,10 @@ def test_model_std_is_relative_absolute_or_nothing_and_adds_in_quadrature():
 def test_each_shipped_table_names_its_calibration_worlds_and_only_parameters_the_fit_has(kind):
     """Each kind's table was measured on calibration seeds, none the benchmark scores or a
     test uses, and lists only names the fit reports (a typo would silently add nothing)."""
-    from identify.candidates.engine_impact import CANDIDATE
-    from identify.model import NUISANCE, base_parameters
+    from identify.discover.candidates.engine_impact import CANDIDATE
+    from identify.fitting.model import NUISANCE, base_parameters
 
-    doc = json.loads((ROOT / "identify" / "model_error.json").read_text())["tables"][kind]
+    doc = json.loads(TABLE_FILE.read_text())["tables"][kind]
     assert doc["seeds"] and min(doc["seeds"]) >= CALIBRATION_SEED_BASE
     assert str(doc["seeds"][0]) in doc["source"]
     known = {p.name for p in base_parameters()} | set(NUISANCE) | {p.name for p in CANDIDATE.parameters}
@@ -72,7 +72,7 @@ def test_each_shipped_table_names_its_calibration_worlds_and_only_parameters_the
 
 
 def test_a_recording_of_positions_takes_the_film_table_one_of_accelerations_the_sensors_table():
-    from identify.measurement import Measurement
+    from identify.recordings.measurement import Measurement
 
     t = np.linspace(0.0, 0.1, 5)
     film = Measurement(t=t, channels={"x_m": t}, sigma={"x_m": np.full(5, 1e-3)})

@@ -226,7 +226,7 @@ def test_isomme_with_a_line_changed(data):
 @SETTINGS
 @given(st.data())
 def test_tracks_csv_with_a_line_changed(data):
-    from identify.measurement import measurement_from_tracks_csv
+    from identify.recordings.measurement import measurement_from_tracks_csv
 
     lines = ["t_ms,x_m,x_sigma_m,pitch_rad"] + [f"{t},{0.01 * t:.4f},0.001,0.0" for t in range(-5, 20)]
     i = data.draw(st.integers(0, len(lines) - 1))

@@ -27,7 +27,7 @@ def legend_texts(ax):
 
 
 def test_force_deflection_curves_have_distinct_labels(fake_fit, a4, tmp_path, figures):
-    from identify.discovery_plots import _force_deflection
+    from identify.discover.plots import _force_deflection
 
     final = SimpleNamespace(**{**vars(fake_fit), "model": "base+stiffness_zone"})
     found = SimpleNamespace(final=final, start=fake_fit, discoveries=[], missing=None)
@@ -42,7 +42,7 @@ def test_force_deflection_curves_have_distinct_labels(fake_fit, a4, tmp_path, fi
 
 
 def test_every_silhouette_panel_has_x_ticks(fake_fit, a4, tmp_path, figures):
-    from identify.plots import plot_silhouettes
+    from identify.report.plots import plot_silhouettes
 
     plot_silhouettes(fake_fit, a4, None, tmp_path / "s.png")
     fig = figures[-1]
@@ -53,7 +53,7 @@ def test_every_silhouette_panel_has_x_ticks(fake_fit, a4, tmp_path, figures):
 
 
 def test_the_residual_plots_grey_band_is_named(fake_fit, tmp_path, figures):
-    from identify.plots import plot_residuals
+    from identify.report.plots import plot_residuals
 
     plot_residuals(fake_fit, tmp_path / "r.png")
     fig = figures[-1]
@@ -65,7 +65,7 @@ def test_force_crush_shows_each_body_of_a_two_body_model(tmp_path, figures):
     """Force vs crush of a two-body model: the whole barrier force, the structure's against
     the cabin's crush and the engine block's against its own crush, each named, with axis
     units; a one-body model draws only the whole force."""
-    from identify.force_check import plot_force_crush
+    from identify.report.force_check import plot_force_crush
 
     d = np.linspace(0.0, 0.6, 50)
     f_e = np.where(d > 0.3, 2e6 * (d - 0.3), 0.0)
@@ -92,14 +92,14 @@ def drawn_axes(fig):
     return [ax for ax in fig.axes if ax.axison]
 
 
-# ---------------------------------------------------------------- identify.plots
+# ---------------------------------------------------------------- identify.report.plots
 
 
 def test_displacement_velocity_names_each_curve_with_units(fake_fit, default_run, tmp_path, figures):
     """Fig. 6: x over v, each panel's measured, fitted and V-SIM default curves named, the
     axes in m, m/s and ms (the curves drawn in those units); without a default run, no
     default curve."""
-    from identify.plots import plot_displacement_velocity
+    from identify.report.plots import plot_displacement_velocity
 
     shifted = SimpleNamespace(**{**vars(fake_fit), "contact_time": 0.003})  # contact 3 ms into the recording
     plot_displacement_velocity(shifted, default_run, tmp_path / "dv.png")
@@ -128,7 +128,7 @@ def test_residual_panels_carry_their_units_and_name_both_fits(fake_fit, tmp_path
     """One panel per fitted channel, its axis in the channel's plotting unit (mm, deg) and
     the residual drawn in it; with a ``before`` fit both fits are named with their RMS; the
     discovery windows are named; the title is shown."""
-    from identify.plots import plot_residuals
+    from identify.report.plots import plot_residuals
 
     before = SimpleNamespace(**{**vars(fake_fit), "model": "base before", "rms": {c: 0.002 for c in fake_fit.rms}})
     windows = [("engine block", 40.0, 60.0), ("stiffness zone", 100.0, 120.0)]
@@ -153,7 +153,7 @@ def test_silhouettes_panels_are_the_measured_times_and_name_three_outlines(fake_
                                                                           figures):  # fmt: skip
     """One panel per requested time inside the measurement, each named by its time; the
     legend names the fitted, measured and V-SIM default outlines; X in metres."""
-    from identify.plots import plot_silhouettes
+    from identify.report.plots import plot_silhouettes
 
     plot_silhouettes(fake_fit, a4, default_run, tmp_path / "s.png", times_ms=(0, 100, 250, 400))
     fig = figures[-1]
@@ -166,14 +166,14 @@ def test_silhouettes_panels_are_the_measured_times_and_name_three_outlines(fake_
     assert legend_texts(figures[-1].axes[0]) == ["fitted model", "measured pose"]
 
 
-# ---------------------------------------------------------------- identify.force_check
+# ---------------------------------------------------------------- identify.report.force_check
 
 
 def test_force_time_names_measured_predicted_and_comparison_curves(tmp_path, figures):
     """Measured and predicted force named, in kN against ms; the rigid-body and base-model
     curves named (the base model by ``base_label``) when given; the comparison's scores and
     the title above."""
-    from identify.force_check import plot_force_time
+    from identify.report.force_check import plot_force_time
 
     t = np.linspace(0.0, 120.0, 121)
     measured = 3e5 * np.sin(np.pi * t / 120.0)
@@ -209,7 +209,7 @@ def test_force_time_names_measured_predicted_and_comparison_curves(tmp_path, fig
 
 def test_force_crush_draws_in_the_units_it_names(tmp_path, figures):
     """Force against crush: the curves in kN and m as the axes say, the title shown."""
-    from identify.force_check import plot_force_crush
+    from identify.report.force_check import plot_force_crush
 
     d = np.linspace(0.0, 0.6, 50)
     plot_force_crush(tmp_path / "fc.png", d, 8e5 * d, 0.9 * d, 7e5 * d, title="10146")
@@ -294,13 +294,13 @@ def test_distributions_have_a_panel_per_output_with_its_unit(tmp_path, figures):
     assert "median and 90 % interval" in fig.get_suptitle()
 
 
-# ---------------------------------------------------------------- identify.comparison
+# ---------------------------------------------------------------- identify.report.comparison
 
 
 def test_comparison_histories_name_both_runs_with_units(identified_run, default_run, tmp_path, figures):
     """X and V of both runs, each curve named by its run, axes in ms, m and m/s; the
     position difference on its own axis, named as b - a, in m."""
-    from identify.comparison import plot_histories
+    from identify.report.comparison import plot_histories
 
     plot_histories(identified_run, default_run, ("identified", "default"), tmp_path / "h.png", title="A4")
     fig = figures[-1]
@@ -324,7 +324,7 @@ def test_comparison_silhouettes_a_panel_per_time_with_both_runs(a4, identified_r
     named by their runs in the legend."""
     from matplotlib.patches import Polygon
 
-    from identify.comparison import plot_silhouettes
+    from identify.report.comparison import plot_silhouettes
 
     plot_silhouettes(a4, identified_run, default_run, ("identified", "default"), tmp_path / "c.png",
                      times=(0.05, 0.15, 0.3, 0.5), title="A4")  # fmt: skip

@@ -136,7 +136,7 @@ def test_engine_is_processed_exactly_as_the_cabin(test10146):
 
 
 def test_sensor_recording_marks_the_engine_displacement_derived():
-    from identify.recording import load_recording
+    from identify.recordings.load import load_recording
 
     m = load_recording(HEADER, car_geometry=None).measurement  # geometry: films only
     # both displacements are integrals of the fitted velocities: plotted, not fitted twice
@@ -345,7 +345,7 @@ def test_sensor_test_built_directly(test10146):
 
 
 def test_tracks_csv_engine_velocity_is_derived(tmp_path):
-    from identify.measurement import measurement_from_tracks_csv
+    from identify.recordings.measurement import measurement_from_tracks_csv
 
     p = tmp_path / "tracks.csv"
     t = np.arange(5)

@@ -1,4 +1,4 @@
-"""Results folders (``identify.results``): written atomically, a manifest of what the tool
+"""Results folders (``identify.report.results``): written atomically, a manifest of what the tool
 wrote, a re-run replaces only that, the user's files are never touched, modes from the umask."""
 
 import json
@@ -8,7 +8,7 @@ import stat
 import pytest
 
 from identify.errors import UserError
-from identify.results import MANIFEST, ResultsFolder, discard_temporaries, write_text_atomic
+from identify.report.results import MANIFEST, ResultsFolder, discard_temporaries, write_text_atomic
 
 NAMES = ("result.json", "report.md", "plot.png")
 

@@ -243,11 +243,11 @@ def test_monte_carlo_intervals_cover_the_truth(short_case):
     assert 0.87 <= coverage <= 0.93, coverage
 
 
-# ---------------------------------------------------------------- identify.comparison
+# ---------------------------------------------------------------- identify.report.comparison
 
 
 def test_comparison_reproduces_the_papers_position_difference(identified_run, default_run, tmp_path):
-    from identify.comparison import compare_runs, plot_histories
+    from identify.report.comparison import compare_runs, plot_histories
 
     c = compare_runs(identified_run, default_run)
     # docs/physics.md (the paper): default vs identified peak at dX = 0.099 m; where, and the
@@ -264,7 +264,7 @@ def test_comparison_reproduces_the_papers_position_difference(identified_run, de
 
 
 def test_body_outline_follows_the_pose_formula(a4):
-    from identify.comparison import body_outline
+    from identify.report.comparison import body_outline
 
     rest = body_outline(a4, 0.0, 0.0, 0.0)
     np.testing.assert_allclose(rest, np.asarray(a4.silhouette_side), atol=1e-12)

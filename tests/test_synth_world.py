@@ -46,7 +46,7 @@ def test_film_world_tracks_to_its_own_truth(film_world):
     # does not enter). A wrong time or x origin, sign or scale in the truth breaks it: one
     # frame at 15 m/s is 15 mm, a 1 % scale error 6 mm at 0.6 m of travel.
     from identify.identification import car_geometry_of
-    from identify.recording import load_recording
+    from identify.recordings.load import load_recording
     from sim import load_vehicle
 
     folder, truth, stdout = film_world

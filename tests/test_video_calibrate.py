@@ -266,7 +266,7 @@ def test_estimate_lens_without_points_says_not_corrected():
 # ---------------------------------------------------------------- rendered frames
 
 def _render(direction=1, seg=0.1, size=(640, 480), k1=0.0, noise=2.0, car_name="audi_a4"):
-    from identify.synthetic import car_geometry, load_vehicle_dict
+    from identify.recordings.synthetic import car_geometry, load_vehicle_dict
     from synth.render import Renderer
     from synth.scene import (Effects, Motion, Scene, default_camera, default_tapes,
                              default_targets)
@@ -343,7 +343,7 @@ def test_scale_disagreement_is_reported():
 
 
 def test_outline_of_another_car_is_reported():
-    from identify.synthetic import car_geometry, load_vehicle_dict
+    from identify.recordings.synthetic import car_geometry, load_vehicle_dict
     img, car, cam, _ = _render(1, 0.1, (640, 480))
     golf = car_geometry(load_vehicle_dict("vw_golf_7"))  # the film shows an Audi A4
     est = measure_scale(img, 0.1)
@@ -353,7 +353,7 @@ def test_outline_of_another_car_is_reported():
 
 
 def test_silhouette_not_found_raises():
-    from identify.synthetic import car_geometry, load_vehicle_dict
+    from identify.recordings.synthetic import car_geometry, load_vehicle_dict
     car = car_geometry(load_vehicle_dict("audi_a4"))
     img = np.full((480, 640), 100, np.uint8)
     with pytest.raises(VideoError, match="outline"):

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from identify.synthetic import car_geometry, load_vehicle_dict
+from identify.recordings.synthetic import car_geometry, load_vehicle_dict
 from video.errors import VideoError
 from video.io import open_film
 from synth.render import Renderer, write_film

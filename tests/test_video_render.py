@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from identify.synthetic import car_geometry, load_vehicle_dict
+from identify.recordings.synthetic import car_geometry, load_vehicle_dict
 from synth.vehicle import SynthError
 from synth.render import Renderer, read_truth, write_film
 from synth.scene import (
@@ -203,10 +203,10 @@ def test_write_png_folder_and_truth(tmp_path):
     assert cols["x_m"][4] == pytest.approx(0.0, abs=1e-12)
 
 
-# ------------------------------------------------------------ glue (identify.synthetic)
+# ------------------------------------------------------------ glue (identify.recordings.synthetic)
 
 from identify.errors import UserError  # noqa: E402
-from identify.synthetic import analytic_trajectory, render_crash  # noqa: E402
+from identify.recordings.synthetic import analytic_trajectory, render_crash  # noqa: E402
 
 
 def test_car_geometry_from_vehicle_file_and_bad_files():
@@ -255,7 +255,7 @@ def test_render_crash_prepends_a_constant_speed_approach(tmp_path):
 
 @pytest.mark.slow
 def test_simulate_and_render_matches_the_model(tmp_path):
-    from identify.synthetic import simulate_and_render
+    from identify.recordings.synthetic import simulate_and_render
 
     meta = simulate_and_render("audi_a4", "paper_identified", 56.3, tmp_path / "a4.mp4", duration=0.05,
                                frames_before=5, width=320, height=128)

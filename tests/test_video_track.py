@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from identify.synthetic import car_geometry
+from identify.recordings.synthetic import car_geometry
 from video.errors import VideoError
 from video.io import frame_noise_sigma
 from video.motion import (
@@ -359,7 +359,7 @@ def test_block_of_a_wheel_slowed_by_the_crush_with_a_noisy_hub_angle():
 @pytest.mark.slow
 def test_film_of_a_simulated_crash(identified_run, tmp_path):
     """The collision model's own A4 crash (paper_identified), rendered and tracked."""
-    from identify.synthetic import TRAJECTORY_FIELDS, render_crash
+    from identify.recordings.synthetic import TRAJECTORY_FIELDS, render_crash
     from sim import events_ms
     from video.io import open_film
 

@@ -1,11 +1,11 @@
 """Wheels that spin on ahead of the car's travel are fitted only until they do
-(identify/wheel_spin.py), on hand-made series."""
+(identify/fitting/wheel_spin.py), on hand-made series."""
 
 import numpy as np
 import pytest
 
-from identify.measurement import Measurement
-from identify.wheel_spin import SPIN_ON_RAD, spin_on_time, without_spinning_wheels
+from identify.recordings.measurement import Measurement
+from identify.fitting.wheel_spin import SPIN_ON_RAD, spin_on_time, without_spinning_wheels
 
 R = 0.3  # m, wheel radius
 T = np.arange(-0.03, 0.2, 0.001)

@@ -52,7 +52,7 @@ def make(name: str) -> dict:
     import numpy as np
 
     jax.config.update("jax_enable_x64", True)
-    from identify.synthetic import TRAJECTORY_FIELDS, render_crash
+    from identify.recordings.synthetic import TRAJECTORY_FIELDS, render_crash
     from sim import events_ms, load_vehicle, named_params, simulate
     from synth.render import update_truth
     from synth.scene import Effects

@@ -19,7 +19,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent))
 
-from identify.synthetic import simulate_and_render  # noqa: E402
+from identify.recordings.synthetic import simulate_and_render  # noqa: E402
 from synth.scene import Effects  # noqa: E402
 
 

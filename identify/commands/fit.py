@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from identify.errors import UserError
-from identify.report import prior_lines
+from identify.report.markdown import prior_lines
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     if not 1 <= args.starts <= 50:
         raise UserError(f"--starts must be in 1..50, got {args.starts}")
 
-    from identify.results import ResultsFolder, default_output_folder
+    from identify.report.results import ResultsFolder, default_output_folder
 
     if not args.recording.exists():
         raise UserError(f"{args.recording} does not exist")
@@ -61,7 +61,7 @@ def _run(args: argparse.Namespace, folder) -> int:
     import dataclasses
 
     import identify
-    from identify.fitting import FitOptions
+    from identify.fitting.collision_fit import FitOptions
 
     t0 = time.perf_counter()
 

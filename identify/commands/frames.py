@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.every < 1:
         raise UserError(f"--every must be a positive whole number, got {args.every}")
-    from identify.results import make_temp_dir, remove_temp
+    from identify.report.results import make_temp_dir, remove_temp
 
     out = Path(args.out)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
@@ -69,7 +69,7 @@ def _write_frames(args, out, tmp) -> int:
     import cv2
 
     from identify.errors import UserError
-    from identify.results import _unregister
+    from identify.report.results import _unregister
     from video.io import open_film
 
     film = open_film(args.video, fps=args.fps)
@@ -105,7 +105,7 @@ def _write_frames(args, out, tmp) -> int:
         print(file=sys.stderr)
     for note in film.notes:
         print(f"note: {note}", file=sys.stderr)
-    from identify.results import _LOCK, current_umask
+    from identify.report.results import _LOCK, current_umask
 
     mask = current_umask()
     tmp.chmod(0o777 & ~mask)

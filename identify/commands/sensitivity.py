@@ -133,7 +133,7 @@ def _mechanisms_from_result(doc, notes):
         value = entry.get("value") if isinstance(entry, dict) else entry
         if dot and effect in MECHANISMS and isinstance(value, (int, float)) and not isinstance(value, bool):
             fields.setdefault(effect, {})[field] = jnp.asarray(float(value))
-    from identify.model import VEHICLE_OVERRIDES
+    from identify.fitting.model import VEHICLE_OVERRIDES
 
     vehicle_effects = {name.split(".", 1)[0] for name in VEHICLE_OVERRIDES}  # applied to the vehicle instead
     for disc in doc.get("discoveries") or []:
@@ -166,7 +166,7 @@ def _vehicle_overrides(table) -> dict:
     in a result.json's ``"parameters"``."""
     import jax.numpy as jnp
 
-    from identify.model import VEHICLE_OVERRIDES
+    from identify.fitting.model import VEHICLE_OVERRIDES
 
     out = {}
     for name in VEHICLE_OVERRIDES:
@@ -221,7 +221,7 @@ def load_result(result_dir: Path, speed_kmh, notes):
             stds[name] = float(std)
     overrides = _vehicle_overrides(table)
     if overrides:
-        from identify.model import vehicle_with
+        from identify.fitting.model import vehicle_with
 
         vehicle = vehicle_with(vehicle, overrides)
         notes.append("vehicle changed as discovered: " + ", ".join(f"{k} = {v:.6g}" for k, v in overrides.items()))
@@ -367,7 +367,7 @@ def _intervals_csv(summary, units):
 
 
 def run(args: argparse.Namespace) -> int:
-    from identify.results import SENSITIVITY_FILES, ResultsFolder
+    from identify.report.results import SENSITIVITY_FILES, ResultsFolder
 
     if args.result_dir is not None and (args.vehicle or args.params):
         raise UserError("give either RESULT_DIR or --vehicle and --params, not both")
@@ -419,7 +419,7 @@ def _run(args, folder, ranges, times) -> int:
     import json
     import sys
 
-    from identify import comparison as cmp
+    from identify.report import comparison as cmp
     from identify import sensitivity as sens
     from sim import FrontWheelBlock, load_params, load_vehicle, n_samples
 

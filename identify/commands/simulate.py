@@ -40,7 +40,7 @@ DEFAULT_SPEED_KMH = 56.3
 
 def is_our_csv(path: Path) -> bool:
     """True when ``path`` starts with the header line ``identify simulate`` writes."""
-    from identify.trajectory_csv import COLUMNS
+    from identify.report.trajectory_csv import COLUMNS
 
     try:
         with open(path, "rb") as f:
@@ -53,7 +53,7 @@ def is_our_csv(path: Path) -> bool:
 def check_simulate_out(out: Path, force: bool) -> None:
     """Refuse, before simulating, an --out that names a folder, an unwritable place, or a
     file that is not one of our CSVs (unless ``force``)."""
-    from identify.results import check_writable_file
+    from identify.report.results import check_writable_file
 
     check_writable_file(out)
     if out.exists() and not force:
@@ -71,9 +71,9 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
     import sys
 
-    from identify.results import write_text_atomic
+    from identify.report.results import write_text_atomic
     from sim import FrontWheelBlock, events_ms, load_params, load_vehicle, simulate
-    from identify.trajectory_csv import trajectory_csv
+    from identify.report.trajectory_csv import trajectory_csv
 
     speed_kmh = DEFAULT_SPEED_KMH if args.speed is None else args.speed
     if not (math.isfinite(speed_kmh) and 0 < speed_kmh <= 360):

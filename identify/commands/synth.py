@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"[{time.perf_counter() - t0:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
-    from identify.results import make_temp_dir, remove_temp
+    from identify.report.results import make_temp_dir, remove_temp
 
     out = args.out
     try:
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
         world = make_world(args.seed, args.effect, args.vehicle, args.format)
     except SynthError as err:
         raise UserError(str(err)) from None
-    # built in a temporary sibling that Ctrl-C removes (identify.results keeps the list)
+    # built in a temporary sibling that Ctrl-C removes (identify.report.results keeps the list)
     tmp = make_temp_dir(out.absolute().parent, out.name)
     try:
         truth = write_world(world, out, progress=progress, workdir=tmp)

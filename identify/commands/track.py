@@ -38,8 +38,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _check_vehicle(tracks, args) -> list[str]:
-    """The film's wheelbase and length against the vehicle file's (``identify.consistency``)."""
-    from identify.consistency import check_film_against_vehicle
+    """The film's wheelbase and length against the vehicle file's (``identify.recordings.consistency``)."""
+    from identify.recordings.consistency import check_film_against_vehicle
     from identify.identification import vehicle_label
     from sim import load_vehicle
 
@@ -51,9 +51,9 @@ def load_car_geometry(name_or_path: str):
     """Build a ``video.types.CarGeometry`` from a vehicle name or TOML path.
 
     ``sim.load_vehicle`` resolves the name and validates the file (ConfigError, one line);
-    ``identify.synthetic.car_geometry`` builds the video stage's geometry from it.
+    ``identify.recordings.synthetic.car_geometry`` builds the video stage's geometry from it.
     """
-    from identify.synthetic import car_geometry
+    from identify.recordings.synthetic import car_geometry
     from sim import load_vehicle, read_vehicle_file
 
     load_vehicle(name_or_path)
@@ -86,7 +86,7 @@ def _progress(quiet: bool):
 
 def run(args: argparse.Namespace) -> int:
     """Track the film ``args.video`` and write tracks.csv + report; return 0."""
-    from identify.results import RESULT_FILE, TRACK_FILES, ResultsFolder
+    from identify.report.results import RESULT_FILE, TRACK_FILES, ResultsFolder
     from video.io import open_film
     from video.report import write_report, write_tracks_csv
     from video.track import track_film

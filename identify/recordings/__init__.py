@@ -1,4 +1,18 @@
-"""recordings: crash tests recorded by sensors instead of film.
+"""recordings: from a file the user names to the Measurement the fit reads.
+
+    film (video.track) ─┐
+    tracks.csv ─────────┼──load.load_recording──▶ Recording(measurement, tracks, film, sensor_test)
+    EV5 / ISO-MME ──────┘   (sensor tests: read_nhtsa / read_isomme -> SensorTest
+                             -> measurement_from_test)
+        ──consistency──▶ does the film show the car the vehicle file describes?
+
+- ``measurement``: the :class:`Measurement` type (channels, sigma per sample, t = 0 at contact).
+- ``load``: ``load_recording(path, ...)``: the reader chosen by what the path is.
+- ``nhtsa``, ``isomme``, ``motion``: sensor recordings (below).
+- ``consistency``: the film's wheelbase and length against the vehicle file's.
+- ``synthetic``: films drawn from a trajectory with known truth (tests, ``identify track``).
+
+Sensor recordings:
 
     from identify.recordings import read_nhtsa, measurement_from_test
     test = read_nhtsa("data/nhtsa-10146/v10146.EV5")       # or read_isomme("test/TEST.mme")
@@ -9,12 +23,12 @@ ISO/TS 13499) return a :class:`SensorTest`: the vehicle's X accelerations, the e
 accelerations (``engine``, when the engine was instrumented) and the barrier's X load cells
 in SI units (acceleration forward positive, barrier force compressive positive), invalid
 channels skipped with a note. ``measurement_from_test`` filters (SAE J211 CFC 180), finds
-first contact and integrates to the :class:`identify.measurement.Measurement` that the fit
+first contact and integrates to the :class:`identify.recordings.measurement.Measurement` that the fit
 reads: ``x_m``, ``vx_mps`` and, from the engine's accelerometers, ``engine_x_m``,
 ``engine_vx_mps``. ``read_recording`` / ``is_recording`` pick the reader by file type.
 
 The barrier force is deliberately not in the Measurement: it is the independent check of
-``identify.force_check`` (``force_check_document(test, measurement, fitted_trajectory,
+``identify.report.force_check`` (``force_check_document(test, measurement, fitted_trajectory,
 out_dir, contact_time_s)`` after the fit).
 """
 

@@ -325,7 +325,7 @@ def write_isomme(test: SensorTest, folder: str | Path, number: str = "TEST") -> 
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".isomme-", dir=folder.parent))
     try:
-        from identify.results import current_umask
+        from identify.report.results import current_umask
 
         os.chmod(tmp, 0o777 & ~current_umask())  # mkdtemp's 0700 would hide it from colleagues
         (tmp / "Channel").mkdir()

@@ -14,14 +14,14 @@ negative; barrier force compressive positive). This module then
    contact), and puts a sigma on every sample (:func:`motion_sigma`);
 5. does the same for the engine's X accelerometers when the test has them (a second
    measured body: the engine hits the barrier and is stopped long before the cabin);
-6. returns an :class:`identify.measurement.Measurement` with ``x_m`` and ``vx_mps``, and
+6. returns an :class:`identify.recordings.measurement.Measurement` with ``x_m`` and ``vx_mps``, and
    ``engine_x_m`` and ``engine_vx_mps`` (NaN where the engine was not measured).
 
 Engine channels that cannot be used are skipped with a note, never with an error
 (:func:`usable_engine_channels`): the cabin alone still makes a Measurement.
 
 The summed barrier force is deliberately *not* a channel of the Measurement: it is the
-independent check of ``identify.force_check``, which the fit must not see.
+independent check of ``identify.report.force_check``, which the fit must not see.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from identify.errors import UserError
-from identify.measurement import Measurement
+from identify.recordings.measurement import Measurement
 
 G0 = 9.80665  # m/s^2, standard gravity (J211's "g")
 NOISE_END_S = -0.005  # s, pre-impact samples used for offset and noise end here

@@ -392,7 +392,7 @@ def read_nhtsa(path: str | Path, barrier: bool = True, progress=None) -> SensorT
     path : str or Path
         The ``.EV5`` header (channel files beside it).
     barrier : bool
-        Also read the barrier's X load cells (for ``identify.force_check``).
+        Also read the barrier's X load cells (for ``identify.report.force_check``).
     progress : callable, optional
         ``progress(done, total, stage)`` after each channel file (a full load-cell barrier
         has nearly 200).

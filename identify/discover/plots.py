@@ -2,7 +2,7 @@
 
 - ``discovery_residuals.png``: each channel's residual before discovery (base model) and
   after (every accepted mechanism), with the measurement's +-2 sigma band and each
-  discovery's window shaded and labelled (``identify.plots.plot_residuals``);
+  discovery's window shaded and labelled (``identify.report.plots.plot_residuals``);
 - ``discovery_force_deflection.png``: the force-deflection curve the recording implies
   (F = -m a, a the smoothed second derivative of the measured x; crush from the measured
   x and pitch on the fitted force line) against the base model's and the final model's;
@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from identify.plots import WINDOW_COLOURS, plot_residuals  # noqa: E402
+from identify.report.plots import WINDOW_COLOURS, plot_residuals  # noqa: E402
 
 
 def implied_force_deflection(fr, vehicle):
@@ -51,7 +51,7 @@ def plot_discovery(result, out_dir, vehicle=None) -> list[str]:
 
     Parameters
     ----------
-    result : identify.discovery.DiscoveryResult.
+    result : identify.discover.loop.DiscoveryResult.
     out_dir : folder (created if missing).
     vehicle : sim.Vehicle for the implied force (its mass); default: the force-deflection
         figure uses the mass implied by the fitted model (the A4's when unknown).

@@ -1,7 +1,7 @@
 """The fit's weighted least-squares pieces that do not depend on the crash model: a
 channel's residual rows, the residuals' correlation time, and the parameters' covariance.
 
-Pure functions over arrays; ``identify.fitting`` puts the model in front of them. Kept
+Pure functions over arrays; ``identify.fitting.collision_fit`` puts the model in front of them. Kept
 apart so that each can be checked against an independent reference (a linear problem's
 textbook covariance, a Monte Carlo coverage, an AR(1) process's known correlation time)
 without running a simulation (``tests/test_least_squares.py``).

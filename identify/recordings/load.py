@@ -1,4 +1,4 @@
-"""From a file the user names to a :class:`~identify.measurement.Measurement`.
+"""From a file the user names to a :class:`~identify.recordings.measurement.Measurement`.
 
 What the path is decides the reader:
 
@@ -7,7 +7,7 @@ What the path is decides the reader:
 - a ``tracks.csv`` written by ``identify track`` (or by hand): read as it is;
 - a sensor recording, NHTSA's EV5 export or ISO-MME (``identify.recordings``): the
   vehicle's accelerometers integrated to motion; its barrier load cells stay out of the
-  measurement (they are the independent check of ``identify.force_check``).
+  measurement (they are the independent check of ``identify.report.force_check``).
 
 The result keeps what the reports need besides the measurement: the tracks of a film
 (scale, contact frame, overlay) and the film itself.
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from identify.errors import UserError
-from identify.measurement import KNOWN_CHANNELS, Measurement, measurement_from_tracks_csv
+from identify.recordings.measurement import KNOWN_CHANNELS, Measurement, measurement_from_tracks_csv
 
 
 @dataclasses.dataclass

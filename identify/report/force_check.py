@@ -641,7 +641,7 @@ def check_forces(force: BarrierForce, traj, measurement, out_dir: str | Path,
     traj : sim.Trajectory
         The fitted model's simulation (``t`` from the model's first contact, ``force``,
         ``crush``).
-    measurement : identify.measurement.Measurement
+    measurement : identify.recordings.measurement.Measurement
         The measured motion; its ``x_m`` is the measured crush (rigid barrier).
     out_dir : str or Path
         Existing folder.
@@ -702,7 +702,7 @@ def force_check_document(test, measurement, traj, out_dir: str | Path, contact_t
     ----------
     test : identify.recordings.SensorTest
         With barrier load cells.
-    measurement : identify.measurement.Measurement
+    measurement : identify.recordings.measurement.Measurement
         ``identify.recordings.measurement_from_test(test)``: what the fit saw.
     traj : sim.Trajectory
         The fitted model's simulation.

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from identify.residuals import model_crush, phase_at, phase_times_ms
+from identify.fitting.residuals import model_crush, phase_at, phase_times_ms
 
 
 @dataclasses.dataclass
@@ -97,7 +97,7 @@ def x_sensitivities(fr, vehicle, rel_step: float = 1e-4) -> np.ndarray:
     measurement's clock, central differences (the compiled simulation is shared)."""
     import jax.numpy as jnp
 
-    from identify.fitting import model_on_clock_jit
+    from identify.fitting.collision_fit import model_on_clock_jit
     from sim import Solver
 
     t = jnp.asarray(fr.measurement.t)

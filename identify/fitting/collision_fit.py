@@ -4,7 +4,7 @@ Weighted least squares: every residual is (model - measured) / sigma, so the sol
 tolerances and the final chi-square mean something. The solver is optimistix's
 Levenberg-Marquardt with exact forward-mode Jacobians through the JAX simulation, run from
 several starting points at once (vmap) so that a local minimum is not taken for the answer.
-Parameters move in an unconstrained space (``identify.model.FreeParameter``); the
+Parameters move in an unconstrained space (``identify.fitting.model.FreeParameter``); the
 covariance comes from the Jacobian at the optimum, mapped to physical units, scaled by the
 reduced chi-square when that exceeds 1 (misfit widens the intervals, never narrows them),
 and with each channel's weight divided by its residuals' integrated autocorrelation time
@@ -23,11 +23,11 @@ import numpy as np
 import optimistix as optx
 
 from identify.errors import UserError
-from identify.measurement import Measurement
-from identify.model_error import ModelError, kind_of
-from identify.model_error import table as model_error_table
-from identify.least_squares import channel_residuals, parameter_covariance, prior_residuals, weighted_offset
-from identify.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
+from identify.recordings.measurement import Measurement
+from identify.fitting.model_error import ModelError, kind_of
+from identify.fitting.model_error import table as model_error_table
+from identify.fitting.least_squares import channel_residuals, parameter_covariance, prior_residuals, weighted_offset
+from identify.fitting.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
 
@@ -76,7 +76,7 @@ class FitResult:
     """The outcome of a fit (physical units; see ``names`` and ``units``).
 
     values, std : name -> value, one-sigma uncertainty: the data's and the model's own error
-        in quadrature (``identify.model_error``); std_data, std_model : the two parts.
+        in quadrature (``identify.fitting.model_error``); std_data, std_model : the two parts.
     covariance : (p, p) in the order of ``names``, the model's error added to its diagonal;
     correlation : the data's (what the recording ties together), same order.
     identified : name -> (bool, reason) for the collision parameters, for other log-scale
@@ -190,7 +190,7 @@ def _values(spec, u, data):
 
 
 def model_on_clock(values, data, channels, n_out: int, solver: Solver):
-    """The model with physical ``values`` (name -> value, ``identify.model`` names) seen on
+    """The model with physical ``values`` (name -> value, ``identify.fitting.model`` names) seen on
     the measurement's clock (pure, jit-able; ``model_on_clock_jit`` is the compiled one).
 
     data : dict with ``template`` (sim.Params the values go into), ``speed_guess`` (m/s,
@@ -303,7 +303,7 @@ def fit(
     priors : name -> (value, sigma) in physical units: what is known of a fitted quantity
         before the fit (a vehicle file's estimate), a residual (fitted - value) / sigma.
     model_error : the model's own error added to the standard deviations (default the
-        calibrated table of the measurement's kind, ``identify.model_error``;
+        calibrated table of the measurement's kind, ``identify.fitting.model_error``;
         ``model_error.NONE``: the data's alone).
 
     Returns
@@ -474,7 +474,7 @@ def log_scale_identifiability(free, values: dict, std: dict, std_data: dict | No
 
 def model_error_reason(value: float, std_data: float, std_model: float, kind: str) -> str:
     """Why a parameter is not identified when the model's own error ``std_model``
-    (``identify.model_error``) outweighs the data's ``std_data``, else ''."""
+    (``identify.fitting.model_error``) outweighs the data's ``std_data``, else ''."""
     if not std_model > std_data:
         return ""
 

@@ -28,7 +28,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from identify.least_squares import integrated_autocorrelation_time
+from identify.fitting.least_squares import integrated_autocorrelation_time
 
 PHASES = ("approach", "compression", "restitution", "after separation")
 
@@ -164,7 +164,7 @@ def analyse(fr, channels=None, window_ms: float = 15.0, threshold: float = 5.0, 
 
     Parameters
     ----------
-    fr : identify.fitting.FitResult.
+    fr : identify.fitting.collision_fit.FitResult.
     channels : channels to analyse (default: every fitted channel).
     window_ms : ms, width of the sliding mean.
     threshold : alarm level of the sliding mean, in its noise standard deviations.

@@ -7,7 +7,7 @@ reads footage and never makes it, and ``synth`` never imports ``sim``.
 
 Example
 -------
->>> from identify.synthetic import render_crash, analytic_trajectory
+>>> from identify.recordings.synthetic import render_crash, analytic_trajectory
 >>> traj = analytic_trajectory(speed=15.64)                        # doctest: +SKIP
 >>> render_crash("audi_a4", traj, "crash.mp4")                     # doctest: +SKIP
 """
@@ -20,9 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from identify.errors import UserError
+from sim._paths import VEHICLE_DIR
 from video.types import CarGeometry
-
-VEHICLES_DIR = Path(__file__).resolve().parent.parent / "data" / "vehicles"
 
 _GEOMETRY_KEYS = ("length", "height", "wheelbase", "front_overhang", "wheel_radius", "cg_height", "cg_to_front_axle")
 TRAJECTORY_FIELDS = ("t", "x", "z", "pitch", "crush", "front_wheel_angle", "rear_wheel_angle")
@@ -96,9 +95,9 @@ def load_vehicle_dict(name_or_path: str | Path) -> dict:
     """Parse a vehicle TOML by name (``data/vehicles/<name>.toml``) or path."""
     p = Path(name_or_path)
     if not p.suffix:
-        p = VEHICLES_DIR / f"{name_or_path}.toml"
+        p = VEHICLE_DIR / f"{name_or_path}.toml"
     if not p.exists():
-        known = ", ".join(sorted(q.stem for q in VEHICLES_DIR.glob("*.toml")))
+        known = ", ".join(sorted(q.stem for q in VEHICLE_DIR.glob("*.toml")))
         raise UserError(f"unknown vehicle {name_or_path!r}: no file {p}; known: {known}")
     try:
         with p.open("rb") as fh:

@@ -1,8 +1,8 @@
 """Discovery of missing physics: find where the fitted model and the recording part, name
 the mechanism that was left out, add it, refit, and repeat.
 
-    from identify.discovery import discover, plot_discovery
-    result = discover(measurement, vehicle, base_fit)        # base_fit: identify.fitting.fit(...)
+    from identify.discover.loop import discover, plot_discovery
+    result = discover(measurement, vehicle, base_fit)        # base_fit: identify.fitting.collision_fit.fit(...)
     plot_discovery(result, out_dir)                          # PNG file names
     result.discoveries     # result.json's "discoveries" (docs/interface.md)
     result.final           # FitResult of the model with every accepted mechanism
@@ -10,10 +10,10 @@ the mechanism that was left out, add it, refit, and repeat.
 
 The loop (one round per effect):
 
-1. residual analysis of the current fit (``identify.residuals``): per channel, a
+1. residual analysis of the current fit (``identify.fitting.residuals``): per channel, a
    whiteness test and the windows (time, phase, crush) where the residual stops looking
    like measurement noise;
-2. every candidate of ``identify.candidates`` not yet accepted is fitted together with the
+2. every candidate of ``identify.discover.candidates`` not yet accepted is fitted together with the
    base parameters and the mechanisms accepted so far. All candidate fits run through one
    compiled solve (a superset model with every mechanism, unused ones held at values that
    switch them off);
@@ -29,7 +29,7 @@ The loop (one round per effect):
    the recording better than the current model (two-fold block cross-validation: fit on alternate ``cv_block_ms`` blocks,
    predict the others; the first block after contact is fitted in both folds);
 4. the loop stops when the residuals are noise or no candidate is justified. Misfit that
-   remains is estimated as a missing force (``identify.missing_force``) and reported as
+   remains is estimated as a missing force (``identify.discover.missing_force``) and reported as
    ``unexplained`` with its window and a description of its shape, when that force is
    itself justified by the BIC.
 """
@@ -42,7 +42,7 @@ import math
 
 import numpy as np
 
-from identify.candidates import (
+from identify.discover.candidates import (
     BY_EFFECT,
     CANDIDATES,
     accepted_mechanisms,
@@ -54,10 +54,10 @@ from identify.candidates import (
     superset_template,
 )
 from identify.errors import UserError
-from identify.fitting import FitOptions, FitResult, fit
-from identify.missing_force import estimate_missing_force
-from identify.model import NUISANCE
-from identify.residuals import ResidualAnalysis, analyse, channel_chi2, model_crush, phase_at, phase_times_ms
+from identify.fitting.collision_fit import FitOptions, FitResult, fit
+from identify.discover.missing_force import estimate_missing_force
+from identify.fitting.model import NUISANCE
+from identify.fitting.residuals import ResidualAnalysis, analyse, channel_chi2, model_crush, phase_at, phase_times_ms
 
 
 # Candidate fits start next to the answer (the current fit's values): a looser tolerance
@@ -74,7 +74,7 @@ class DiscoveryOptions:
     min_bic_gain : smallest BIC decrease that justifies a candidate (10: "very strong"
         evidence on Kass and Raftery's scale).
     cv_block_ms : ms, length of the alternating blocks of the held-out check.
-    window_ms, threshold : residual analysis (``identify.residuals.analyse``).
+    window_ms, threshold : residual analysis (``identify.fitting.residuals.analyse``).
     fit : options of the candidate fits (one start each from the current fit's values
         and the candidate's starting guesses); fits whose options differ only in
         ``starts`` and ``seed`` share one compile (:func:`fit_base` uses these).
@@ -117,7 +117,7 @@ class DiscoveryResult:
     status : one line for people.
     before, after : residual analyses of ``start`` and ``final``.
     rounds : per round, the candidates tried (list of :class:`Trial`).
-    missing : the estimated missing force (``identify.missing_force.MissingForce``) when
+    missing : the estimated missing force (``identify.discover.missing_force.MissingForce``) when
         misfit remained, else None.
     """
 
@@ -137,18 +137,18 @@ class DiscoveryResult:
 
 def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.replace(CANDIDATE_FIT, starts=5),
              speed_mps=None, progress=None) -> FitResult:
-    """The base model's fit (as ``identify.fitting.fit``) run through discovery's superset
+    """The base model's fit (as ``identify.fitting.collision_fit.fit``) run through discovery's superset
     model with every candidate mechanism switched off: the same answer, and
     :func:`discover` then reuses its compiled solve instead of compiling its own (~20 s).
     The default options are the candidate fits' (tolerance 1e-5, 40 steps a start) with
     five starts.
 
     ``free``: the base parameters to fit (default: all six; see
-    ``identify.model.base_parameters``). A recording that measures a second body (the
+    ``identify.fitting.model.base_parameters``). A recording that measures a second body (the
     engine's accelerometers) fits it as part of the base model
-    (``identify.candidates.measured_effects``), with its vehicle-file priors; the result
+    (``identify.discover.candidates.measured_effects``), with its vehicle-file priors; the result
     holds that mechanism and no other."""
-    from identify.model import base_parameters
+    from identify.fitting.model import base_parameters
     from sim import make_params
 
     names = [p.name for p in (free if free is not None else base_parameters())]
@@ -191,8 +191,8 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
 
 def plot_discovery(result: "DiscoveryResult", out_dir, vehicle=None) -> list[str]:
     """Residuals before/after with each discovery's window, and the implied force-deflection
-    curve against the model's (``identify.discovery_plots``); returns the PNG file names."""
-    from identify.discovery_plots import plot_discovery as _plot
+    curve against the model's (``identify.discover.plots``); returns the PNG file names."""
+    from identify.discover.plots import plot_discovery as _plot
 
     return _plot(result, out_dir, vehicle)
 
@@ -242,7 +242,7 @@ def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
 
 def shape_check(delta_bic: float, generic_gain: float | None, min_bic_gain: float) -> str:
     """'' when a named candidate explains the misfit about as well as the generic missing
-    force does (``identify.missing_force``: pulses anywhere in time, each one paying the
+    force does (``identify.discover.missing_force``: pulses anywhere in time, each one paying the
     extended BIC's price), else why not. ``delta_bic``: the candidate's BIC change (negative:
     better); ``generic_gain``: the generic estimate's BIC decrease on the same fit with the
     same tau (None: no generic force is justified). A candidate whose BIC falls by more than
@@ -394,7 +394,7 @@ def discover(
     ----------
     measurement : identify.Measurement that ``base`` was fitted to.
     vehicle : sim.Vehicle.
-    base : FitResult of the base model (``identify.fitting.fit``).
+    base : FitResult of the base model (``identify.fitting.collision_fit.fit``).
     options : DiscoveryOptions.
     progress : callable taking a one-line status, or None.
 

@@ -1,7 +1,7 @@
 """The library of candidate mechanisms that discovery tries, and the superset model that
 lets one compiled fit try them all.
 
-Every candidate is one module of this package (``identify.candidates.base.Candidate``: its
+Every candidate is one module of this package (``identify.discover.candidates.base.Candidate``: its
 ``sim.mechanisms`` class, free parameters, starting guesses, evidence check, where it acts
 and what makes a fit of it implausible); ``REGISTRY`` lists them, one line each, in the
 order discovery tries them. Adding one is a new module and a line here.
@@ -9,7 +9,7 @@ order discovery tries them. Adding one is a new module and a line here.
 The superset template carries every candidate's mechanism at its neutral value (a blocking
 or zone depth of 10 m is never reached; a progression or rate coefficient of 0 changes
 nothing), so fits that free different candidates differ only in which parameters are held
-(data, not code): one compile serves them all (``identify.fitting.fit(..., held=...)``).
+(data, not code): one compile serves them all (``identify.fitting.collision_fit.fit(..., held=...)``).
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ import importlib
 import jax
 import jax.numpy as jnp
 
-from identify.candidates.base import NEVER_REACHED, Candidate
-from identify.model import base_parameters, vehicle_value
+from identify.discover.candidates.base import NEVER_REACHED, Candidate
+from identify.fitting.model import base_parameters, vehicle_value
 from sim import Params
 
 REGISTRY = (

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import NEVER_REACHED, Candidate, parameter
+from identify.discover.candidates.base import NEVER_REACHED, Candidate, parameter
 from sim import EngineImpact
 
 ENGINE_MASS_FRACTION = 0.13  # of the test mass, when the vehicle file gives no engine_mass

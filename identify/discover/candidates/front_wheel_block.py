@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import (DECISIVE_CHI2, NEVER_REACHED, Candidate, parameter, samples_in_window,
+from identify.discover.candidates.base import (DECISIVE_CHI2, NEVER_REACHED, Candidate, parameter, samples_in_window,
                                       signal_chi2s)
 from sim import FrontWheelBlock
 
@@ -21,7 +21,7 @@ def wheels_stop_turning(fr, vehicle, analysis) -> float:
     """Starting depth (m): the current model's crush where the strongest misfit window of the
     front wheel angle starts (the wheels stop turning there), else where the crush reaches
     the tyre (front overhang minus wheel radius)."""
-    from identify.residuals import model_crush
+    from identify.fitting.residuals import model_crush
 
     depth = float(vehicle.front_overhang - vehicle.wheel_radius)
     windows = [w for w in (analysis.windows if analysis is not None else [])

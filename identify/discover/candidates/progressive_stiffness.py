@@ -3,7 +3,7 @@ Its progression 0 switches it off: a fit that cannot tell it from 0 is no findin
 
 from __future__ import annotations
 
-from identify.candidates.base import Candidate, differs_from_zero, parameter
+from identify.discover.candidates.base import Candidate, differs_from_zero, parameter
 from sim import ProgressiveStiffness
 
 CANDIDATE = Candidate(

@@ -78,7 +78,7 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
             f"| {label} | {_fmt(defaults.get(name), scale)}{u} | {_fmt(p['value'], scale, 4)}{u} |"
             f" {_fmt(p.get('std'), scale, 2)}{u} | {_fmt(p.get('std_data'), scale, 2)}{u} | {status} |"
         )
-    lines += ["", "The std adds to the data's the model's own error (`identify/model_error.py`):"
+    lines += ["", "The std adds to the data's the model's own error (`identify/fitting/model_error.py`):"
               " how far the model's simplifications moved each parameter on recordings it did not make."]
     known = prior_lines(doc.get("priors") or {})
     if known:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import NEVER_REACHED, Candidate, parameter
+from identify.discover.candidates.base import NEVER_REACHED, Candidate, parameter
 from sim import StiffnessZone
 
 

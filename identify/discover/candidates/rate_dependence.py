@@ -4,7 +4,7 @@ negative one, a structure softer when crushed fast, is not physical."""
 
 from __future__ import annotations
 
-from identify.candidates.base import Candidate, differs_from_zero, parameter
+from identify.discover.candidates.base import Candidate, differs_from_zero, parameter
 from sim import RateDependence
 
 NAME = "rate_dependence.rate_coefficient"

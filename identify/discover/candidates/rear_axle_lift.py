@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.candidates.base import DECISIVE_CHI2, Candidate, parameter, samples_in_window, signal_chi2s
-from identify.model import vehicle_value
+from identify.discover.candidates.base import DECISIVE_CHI2, Candidate, parameter, samples_in_window, signal_chi2s
+from identify.fitting.model import vehicle_value
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
 REAR_HEIGHT = "rear_wheel_height_m"

@@ -4,8 +4,8 @@ A candidate is one module of this package defining ``CANDIDATE = Candidate(...)`
 ``sim.mechanisms`` class with its equation and explanation, its free parameters with their
 transforms, the values that switch it off, its starting guesses, what it implies for the
 channels a recording measures directly (its evidence check), where it acts in a fitted
-model and the rules that refuse a fit of it as implausible. ``identify.candidates`` lists
-the modules (one line each); ``identify.discovery`` calls only these hooks, never a
+model and the rules that refuse a fit of it as implausible. ``identify.discover.candidates`` lists
+the modules (one line each); ``identify.discover.loop`` calls only these hooks, never a
 candidate by name.
 """
 
@@ -17,7 +17,7 @@ from typing import Callable
 import jax.numpy as jnp
 import numpy as np
 
-from identify.model import FreeParameter
+from identify.fitting.model import FreeParameter
 
 NEVER_REACHED = 10.0  # m: a depth the crush never reaches (the mechanism stays off)
 DECISIVE_CHI2 = 9.0  # a chi-square difference of 9: three standard deviations
@@ -95,17 +95,17 @@ class Candidate:
 
     effect : effect name (``docs/interface.md``), the mechanism's ``effect``.
     mechanism : the sim mechanism class, or None for a candidate that changes the vehicle
-        (``identify.model.VEHICLE_OVERRIDES``).
+        (``identify.fitting.model.VEHICLE_OVERRIDES``).
     parameters : its fitted fields, as FreeParameter named ``effect.field``.
     neutral : field -> value that switches the mechanism off (physical units), or
         ``"vehicle"``: the vehicle file's own value.
     starts : starting guesses, each field -> a value or a rule ``(fit, vehicle, analysis) ->
         value`` (``fit`` the current model's FitResult, or None before any fit; ``analysis``
-        its ``identify.residuals.ResidualAnalysis``, or None).
+        its ``identify.fitting.residuals.ResidualAnalysis``, or None).
     report : field -> name of the parameter in the discovery's report (``depth_m``).
     text : the one-sentence explanation when there is no mechanism class.
     priors : callable(vehicle) -> {``effect.field``: (value, sigma)}: what is known of its
-        parameters before any fit (``identify.fitting.fit``'s ``priors``), or None.
+        parameters before any fit (``identify.fitting.collision_fit.fit``'s ``priors``), or None.
     evidence : callable(fit, vehicle, window_ms) -> (reason, evidence) checking what the
         mechanism implies for a channel measured directly against what that channel shows:
         ``reason`` '' when the candidate may stand, else why not; ``evidence`` one line for
@@ -113,7 +113,7 @@ class Candidate:
     active : callable(fit) -> bool per output sample of ``fit.trajectory``: where the fitted
         mechanism acts; None: where it changes the loading force (:func:`loading_force_differs`).
     implausible : callable(fit, vehicle) -> '' or why a fit of this candidate is not a
-        finding, beyond the rules every candidate meets (``identify.discovery``).
+        finding, beyond the rules every candidate meets (``identify.discover.loop``).
     unseen : callable(fit) -> {``effect.field``: reason}: its parameters the recorded crash
         cannot show in this fit (an engine that never reaches the barrier shows nothing of its
         gap but that it is larger), reported not identified with the reason.
@@ -151,5 +151,5 @@ class Candidate:
 
 
 def parameter(effect: str, field: str, unit: str, transform: str, **kw) -> FreeParameter:
-    """The candidate's free parameter ``effect.field`` (``identify.model.FreeParameter``)."""
+    """The candidate's free parameter ``effect.field`` (``identify.fitting.model.FreeParameter``)."""
     return FreeParameter(f"{effect}.{field}", unit, transform, **kw)
