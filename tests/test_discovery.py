@@ -3,7 +3,7 @@ mechanism (or a force no candidate has) go in, and the tool must name the mechan
 its window and recover its parameters, reading its output only. These show the loop can find
 what its own model can express; they are no measure of accuracy on real crashes (the
 "inverse crime"): that is measured on the reference world (``tests/test_reference_world_fit.py``,
-``benchmarks/accuracy.py``) and on the NHTSA test (``tests/test_end_to_end.py``). The rules that
+``benchmarks/accuracy.py``) and on the NHTSA test (``tests/test_nhtsa.py``). The rules that
 decide are tested one by one in ``tests/test_discovery_rules.py``.
 
 All synthetic measurements share one shape (t from -20 to 300 ms, the same channels), so

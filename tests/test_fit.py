@@ -2,7 +2,7 @@
 and the fit must give back the parameters they were made with, with honest uncertainty, and
 say what it cannot see. Round trips show the least squares, the covariance and the
 identifiability rules work; accuracy on crashes the model did not make is measured on the
-reference world (``benchmarks/accuracy.py``) and the NHTSA test (``tests/test_end_to_end.py``).
+reference world (``benchmarks/accuracy.py``) and the NHTSA test (``tests/test_nhtsa.py``).
 On its own recordings the model's own error is zero by construction, so these fits add none
 (``model_error=NONE``); the last test checks the calibrated one is added."""
 
