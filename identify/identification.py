@@ -154,6 +154,10 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             "fitted_channels": [c for c in fr.rms if c not in fr.measurement.derived],
             "derived_channels": [c for c in fr.rms if c in fr.measurement.derived],
             "correlation_time_samples": dict(fr.correlation_time),  # integrated autocorrelation time of each residual
+            # each channel's reduced chi-square (at least 1): the factor its variance was widened by
+            "misfit_by_channel": dict(fr.misfit),
+            # the factor each widened channel's sigma was multiplied by in the fit's weights (its own misfit)
+            "sigma_widened_by_channel": dict(fr.sigma_widened),
         },
         "priors": fr.pulls(),
         "discoveries": list(discoveries),
@@ -507,7 +511,9 @@ def _one_body_reference(rec, veh, free, options, speed_mps, say):
     cabin = dataclasses.replace(m, channels={k: v for k, v in m.channels.items() if not k.startswith("engine_")},
                                 sigma={k: v for k, v in m.sigma.items() if not k.startswith("engine_")})
     say("fitting the one-body base model to the cabin alone (for the load-cell comparison)")
-    return fit_base(cabin, veh, free=free, options=options, speed_mps=speed_mps, progress=say)
+    # with the recording's sigmas, as the two-body fit is (``identify.discover.loop.CANDIDATE_FIT``)
+    return fit_base(cabin, veh, free=free, options=dataclasses.replace(options, misfit_weights=False),
+                    speed_mps=speed_mps, progress=say)
 
 
 def vehicle_label(name_or_path) -> str:

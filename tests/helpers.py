@@ -2,6 +2,7 @@
 synthetic Measurement, and NHTSA test 10146 computed from its raw files (the independent
 reference of the EV5 reader, motion and force-check tests)."""
 
+import dataclasses
 import functools
 from pathlib import Path
 
@@ -46,6 +47,17 @@ def synthetic_measurement(vehicle, params, speed=56.3 / 3.6, contact_time=0.0004
         sigma[name] = np.full(len(t), s)
     return Measurement(t=t, channels=channels, sigma=sigma, impact_speed_mps=speed + speed_sigma,
                        impact_speed_sigma=speed_sigma, source="synthetic")  # fmt: skip
+
+
+def with_heave_the_model_cannot_follow(m, contact_s=0.0004, contact_sigma_s=0.0003):
+    """``m`` with a heave and a pitch no collision model parameter can give (Gaussian bumps
+    of 30 mm at 60 ms and 0.06 rad at 90 ms: a richer car's, 15 and 17 sigma of ``NOISE``
+    at their peaks) added to z and pitch, and its first contact seen at ``contact_s`` +-
+    ``contact_sigma_s`` (a film's contact seen in the picture)."""
+    t, channels = m.t, dict(m.channels)
+    channels["z_m"] = channels["z_m"] + 0.03 * np.exp(-0.5 * ((t - 0.06) / 0.025) ** 2)
+    channels["pitch_rad"] = channels["pitch_rad"] + 0.06 * np.exp(-0.5 * ((t - 0.09) / 0.03) ** 2)
+    return dataclasses.replace(m, channels=channels, contact_time_s=contact_s, contact_time_sigma=contact_sigma_s)
 
 
 # ---------------------------------------------------------------------------------------------

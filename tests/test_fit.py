@@ -11,7 +11,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from helpers import synthetic_measurement
+from helpers import synthetic_measurement, with_heave_the_model_cannot_follow
 from identify.fitting.collision_fit import fit, log_scale_identifiability
 from identify.fitting.model_error import NONE, table
 from sim import named_params
@@ -233,6 +233,36 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
     seen = fit(dataclasses.replace(off, contact_time_s=0.0047), a4, model_error=NONE)
     pull = seen.pulls()["contact_time"]
     assert pull["prior"] == 0.0047 and not pull["conflict"] and abs(pull["pull"]) < 1.0
+
+
+def test_a_channel_the_model_cannot_follow_no_longer_moves_what_the_others_measure(a4, paper_measurement):
+    """A heave and a pitch the model cannot follow (``with_heave_the_model_cannot_follow``),
+    added to a recording whose contact was seen to 0.3 ms. Fitted with
+    the recording's sigmas, their misfit drags the contact 1.4 ms from where it was seen,
+    k_compression 4 % and the speed 1.4 %; weighted by each channel's own misfit
+    (``FitOptions.misfit_weights``, the default), x and the seen contact decide them again,
+    and the seen contact's sigma is not widened by the other channels' misfit."""
+    from identify.fitting.collision_fit import FitOptions
+
+    m = with_heave_the_model_cannot_follow(paper_measurement)
+    plain = fit(m, a4, model_error=NONE, options=FitOptions(starts=1, misfit_weights=False))
+    weighted = fit(m, a4, model_error=NONE, options=FitOptions(starts=1))
+    speed = 56.3 / 3.6
+    # measured 2026-11-25: plain contact -1.00 ms, k -3.8 %, speed +1.37 %; weighted 0.36 ms, +0.05 %, +0.15 %
+    assert abs(plain.values["contact_time"] - 0.0004) > 0.001 and abs(plain.speed / speed - 1) > 0.01
+    assert abs(plain.values["k_compression"] / TRUTH["k_compression"] - 1) > 0.03
+    assert plain.sigma_widened == {}
+    assert abs(weighted.values["contact_time"] - 0.0004) < 0.00015
+    assert abs(weighted.values["k_compression"] / TRUTH["k_compression"] - 1) < 0.01
+    assert abs(weighted.speed / speed - 1) < 0.003
+    for name in ("k_compression", "restitution", "contact_time"):
+        truth = 0.0004 if name == "contact_time" else TRUTH[name]
+        assert abs(weighted.values[name] - truth) < 2 * weighted.std[name], name
+    assert weighted.std["contact_time"] < 0.0003  # the seen contact's own sigma, not widened
+    assert weighted.sigma_widened["z_m"] > 10 and weighted.sigma_widened["pitch_rad"] > 10
+    assert weighted.sigma_widened["x_m"] < 1.5 and weighted.misfit["x_m"] < 1.5
+    assert weighted.misfit["z_m"] > 10  # the covariance widens z by its misfit, in the recording's sigmas
+    assert weighted.converged
 
 
 def test_a_films_contact_seen_in_the_picture_enters_the_fit_as_a_measurement():

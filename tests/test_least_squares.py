@@ -154,13 +154,50 @@ def test_a_misfit_larger_than_the_noise_widens_by_chi2_per_dof():
     a, sigma, r, _ = linear_problem()
     n = len(r)
     r2 = 3.0 * r  # the residuals three times the stated sigma
-    u = parameter_covariance(r2, a / sigma, np.ones(2), np.ones(2), {}, n)
+    u = parameter_covariance(r2, a / sigma, np.ones(2), np.ones(2), {"x": np.arange(n)}, n)
     assert u.dof == n - 2 and u.chi2 == pytest.approx(float(r2 @ r2))
-    assert u.scale == pytest.approx(u.chi2 / (n - 2))
-    assert 7.0 < u.scale < 11.0
-    np.testing.assert_allclose(u.cov, u.scale * sigma**2 * np.linalg.inv(a.T @ a), rtol=1e-8)
-    small = parameter_covariance(0.5 * r, a / sigma, np.ones(2), np.ones(2), {}, n)
-    assert small.scale == 1.0  # a fit better than the noise does not shrink the errors
+    assert u.misfit["x"] == pytest.approx(u.chi2 / (n - 2))
+    assert 7.0 < u.misfit["x"] < 11.0
+    np.testing.assert_allclose(u.cov, u.misfit["x"] * u.tau["x"] * sigma**2 * np.linalg.inv(a.T @ a), rtol=1e-8)
+    small = parameter_covariance(0.5 * r, a / sigma, np.ones(2), np.ones(2), {"x": np.arange(n)}, n)
+    assert small.misfit["x"] == 1.0  # a fit better than the noise does not shrink the errors
+
+
+def test_one_channels_misfit_widens_that_channel_alone_and_never_a_prior():
+    # two channels see the same line; the second misses by 10 sigma (a model that cannot follow
+    # it), the first is at its noise. A prior on the intercept is a measurement of its own.
+    a, sigma, r, _ = linear_problem()
+    n, prior_sigma = len(r), 0.002
+    jac = np.vstack([a / sigma, a / sigma, [[1.0 / prior_sigma, 0.0]]])
+    rows = np.concatenate([r, 10.0 * r[::-1], [0.0]])
+    u = parameter_covariance(rows, jac, np.ones(2), np.ones(2), {"good": np.arange(n), "bad": n + np.arange(n)},
+                             len(rows))
+    assert u.misfit["good"] == pytest.approx(max(1.0, float(r @ r) / (n - 1)), rel=1e-9)
+    assert u.misfit["bad"] == pytest.approx(100.0 * float(r @ r) / (n - 1), rel=1e-9)
+    ata = a.T @ a / sigma**2
+    info = (ata / (u.tau["good"] * u.misfit["good"]) + ata / (u.tau["bad"] * u.misfit["bad"])
+            + np.diag([1 / prior_sigma**2, 0.0]))
+    np.testing.assert_allclose(u.cov, np.linalg.inv(info), rtol=1e-8)
+    # one global factor (the whole fit's chi2 / dof, about 50) would have widened the good
+    # channel and the prior too: the intercept's std would be about 7 times as large
+    assert u.std[0] < prior_sigma
+
+
+def test_widened_as_a_whole_the_priors_widen_with_the_worst_channel():
+    # per_channel=False (discovery's candidate fits): one factor, the whole fit's chi2 / dof,
+    # for every row, the prior's included
+    a, sigma, r, _ = linear_problem()
+    n, prior_sigma = len(r), 0.002
+    jac = np.vstack([a / sigma, a / sigma, [[1.0 / prior_sigma, 0.0]]])
+    rows = np.concatenate([r, 10.0 * r[::-1], [0.0]])
+    channels = {"good": np.arange(n), "bad": n + np.arange(n)}
+    u = parameter_covariance(rows, jac, np.ones(2), np.ones(2), channels, len(rows), per_channel=False)
+    assert u.scale == pytest.approx(float(rows @ rows) / (len(rows) - 2)) and u.scale > 40
+    assert u.misfit == {"good": u.scale, "bad": u.scale}
+    ata = a.T @ a / sigma**2
+    info = (ata / u.tau["good"] + ata / u.tau["bad"] + np.diag([1 / prior_sigma**2, 0.0])) / u.scale
+    np.testing.assert_allclose(u.cov, np.linalg.inv(info), rtol=1e-8)
+    assert u.std[0] > prior_sigma  # the prior's sigma widened with the rest
 
 
 def test_a_prior_adds_its_information():
@@ -176,7 +213,7 @@ def test_a_prior_adds_its_information():
 def test_few_residuals_leave_one_degree_of_freedom():
     a, sigma, r, _ = linear_problem()
     u = parameter_covariance(r, a / sigma, np.ones(2), np.ones(2), {}, n_res=3)
-    assert u.dof == 1 and u.scale == pytest.approx(u.chi2)
+    assert u.dof == 1 and u.chi2 == pytest.approx(float(r @ r))
 
 
 def test_weak_data_still_give_their_textbook_covariance():

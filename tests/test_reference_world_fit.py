@@ -82,6 +82,10 @@ def test_the_gap_of_an_engine_that_never_reaches_the_barrier_is_not_identified(c
     ident, truth = clean_world_fit
     gap = ident.document["parameters"]["engine_impact.gap"]
     assert not gap["identified"], gap
+    # with a measured second body the reported fit keeps the recording's sigmas: weighted by
+    # each channel's misfit, the engine's channel freed its parameters to absorb the cabin's
+    # misfit, and the second body came out "borne out" with this gap identified
+    assert ident.fit.sigma_widened == {} and ident.document["fit"]["sigma_widened_by_channel"] == {}
     # on this world the fit still has the engine hit the barrier (a gap of 0.27 m, truth 0.67 m),
     # which the cabin's motion does not bear out: a lower bound would have to come from a miss
     found = re.search(r"exceed the ([0-9.]+) m it travelled", gap["reason"])

@@ -504,8 +504,11 @@ def _contact(film, p: _Pose, dropped, cg_uv, cg_src, car, s, d, lens, stab, fps,
         x_fit = p.XZ[:, 0]
         tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps)
     notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
-    seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, p.axes, car, s, d, tc, lens, stab) \
-        if cg_src and config.see_contact else None
+    seen = None
+    if config.see_contact:  # the nose is placed from the CG: without one it is not looked for, and said
+        seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, p.axes, car, s, d, tc, lens, stab) if cg_src \
+            else not_seen("not looked for: the CG is not located (no hub targets, no fitted silhouette), so the"
+                          " nose cannot be placed")
     tc_sigma = None
     if seen is not None:
         tc, tc_sigma, note = settle_contact(tc, seen)

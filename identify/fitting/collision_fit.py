@@ -5,11 +5,19 @@ tolerances and the final chi-square mean something. The solver is optimistix's
 Levenberg-Marquardt with exact forward-mode Jacobians through the JAX simulation, run from
 several starting points at once (vmap) so that a local minimum is not taken for the answer.
 Parameters move in an unconstrained space (``identify.fitting.model.FreeParameter``); the
-covariance comes from the Jacobian at the optimum, mapped to physical units, scaled by the
-reduced chi-square when that exceeds 1 (misfit widens the intervals, never narrows them),
-and with each channel's weight divided by its residuals' integrated autocorrelation time
-(tracking errors of neighbouring frames are correlated: n correlated samples carry the
-information of n / tau independent ones).
+covariance comes from the Jacobian at the optimum, mapped to physical units, with each
+channel's weight divided by its residuals' integrated autocorrelation time (n correlated
+samples carry the information of n / tau independent ones) and widened for a misfit beyond
+the noise (``least_squares``).
+
+A channel the model misses by far more than its noise (a richer car's heave and pitch) would
+otherwise steer the fit: with ``FitOptions.misfit_weights`` (the default) the fit is run
+again from its optimum with each channel's sigma widened by that channel's own misfit,
+sqrt(tau * max(1, chi2/dof)), so the channels the model can follow (x) and the measured
+contact decide what they measure, instead of being traded against what the model cannot
+follow; its covariance widens each channel by its own misfit and keeps a prior's sigma.
+Without it (discovery's candidate fits) the covariance is widened as a whole by the reduced
+chi-square.
 """
 
 from __future__ import annotations
@@ -26,7 +34,13 @@ from identify.errors import UserError
 from identify.recordings.measurement import Measurement
 from identify.fitting.model_error import ModelError, kind_of
 from identify.fitting.model_error import table as model_error_table
-from identify.fitting.least_squares import channel_residuals, parameter_covariance, prior_residuals, weighted_offset
+from identify.fitting.least_squares import (
+    channel_residuals,
+    channel_variance_factors,
+    parameter_covariance,
+    prior_residuals,
+    weighted_offset,
+)
 from identify.fitting.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
@@ -42,6 +56,10 @@ NOT_IDENTIFIED = {
     "dz_contact": ("absolute", 0.10),
 }
 LOG_SCALE_NOT_IDENTIFIED = 0.2  # relative std beyond which any other log-scale parameter is not identified
+# the fit weighted by each channel's misfit (``_weighted_by_misfit``): at most this many
+# reweighted fits, each given at most WEIGHTED_SOLVES runs of the solver (max_steps each)
+MISFIT_ROUNDS = 3
+WEIGHTED_SOLVES = 5
 
 # Random starting points are drawn from these physical ranges (log-uniform for "log").
 START_RANGES = {
@@ -61,6 +79,12 @@ class FitOptions:
     rtol, atol : optimistix tolerances on the unconstrained parameters and the cost.
     seed : random seed of the extra starting points.
     solver : sim.Solver of the simulations.
+    misfit_weights : after the search, fit again from its best with each channel's sigma
+        widened by its own misfit, sqrt(tau * max(1, reduced chi-square)), and widen the
+        covariance channel by channel, the priors at their own sigmas (module doc); the
+        reported chi-square stays in the recording's own sigmas. False: the recording's
+        sigmas, and the covariance widened as a whole by max(1, chi2/dof) (discovery's
+        candidate fits, whose rules were set against that: ``identify.discover.loop``).
     """
 
     starts: int = 5
@@ -69,6 +93,7 @@ class FitOptions:
     atol: float = 1e-6
     seed: int = 0
     solver: Solver = Solver()
+    misfit_weights: bool = True
 
 
 @dataclasses.dataclass
@@ -85,7 +110,13 @@ class FitResult:
     at_bound : name -> which bound, for fitted quantities within 1 % of a bound of their
         transform's range (``FreeParameter.at_bound``).
     rms : channel -> RMS residual in the channel's unit; rms_m the x channel's (m).
-    chi2, dof : weighted sum of squares and degrees of freedom.
+    chi2, dof : sum of squares weighted by the recording's sigmas, degrees of freedom.
+    misfit : channel -> the factor its variance was widened by in the covariance: max(1,
+        the channel's reduced chi-square) (``least_squares.channel_variance_factors``), or
+        the whole fit's when the fit was not weighted by misfit (``FitOptions.misfit_weights``).
+    sigma_widened : channel -> the factor the fit's weights multiplied the channel's sigma by,
+        for the channels widened (``FitOptions.misfit_weights``; empty when the fit used the
+        recording's sigmas, also when the weighted fit did not converge).
     converged : the best start converged; starts_at_best : how many starts reached it;
     other_minima : costs of distinct worse minima found.
     params, speed, contact_time : the fitted model (sim.Params, m/s, s).
@@ -120,6 +151,8 @@ class FitResult:
     at_bound: dict[str, str] = dataclasses.field(default_factory=dict)
     std_data: dict[str, float] = dataclasses.field(default_factory=dict)
     std_model: dict[str, float] = dataclasses.field(default_factory=dict)
+    misfit: dict[str, float] = dataclasses.field(default_factory=dict)
+    sigma_widened: dict[str, float] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -248,6 +281,33 @@ def _finish(spec, channels, n_out, options, data, u):
 _finish_jit = jax.jit(_finish, static_argnames=("spec", "channels", "n_out", "options"))
 
 
+def _weighted_by_misfit(spec, channels, n_out, options, data, u, rows: dict, n_fitted: int):
+    """The fit continued from its optimum ``u`` with each channel's sigma multiplied by
+    sqrt(tau * max(1, reduced chi-square)) of that channel's residuals in the recording's
+    own sigmas (``least_squares.channel_variance_factors``), until those factors change by
+    less than 10 % (at most ``MISFIT_ROUNDS`` fits): after the first, a channel's misfit is
+    no longer inflated by the compromise the others forced on it. A weighted fit that does
+    not converge within ``WEIGHTED_SOLVES`` runs of the solver is dropped, the last one that
+    did kept. Returns (u, data with the weights used, (n_channels,) sigma multipliers)."""
+    w = np.asarray(data["w"])
+    widen, weighted = np.ones(len(channels)), data
+    for _ in range(MISFIT_ROUNDS):
+        r = np.asarray(_finish_jit(spec, channels, n_out, options, data, u)[0])
+        tau, misfit = channel_variance_factors(r, rows, n_fitted)
+        new = np.array([math.sqrt(tau[c] * misfit[c]) for c in channels])
+        if np.allclose(new, widen, rtol=0.1):
+            break
+        trial, u1 = {**data, "w": jnp.asarray(w / new[:, None])}, u
+        for _ in range(WEIGHTED_SOLVES):  # continued while the step limit stopped it
+            u1, cost, ok = _solve_jit(spec, channels, n_out, options, trial, u1)
+            if bool(ok) or not np.isfinite(float(cost)):
+                break
+        if not (bool(ok) and np.isfinite(float(cost))):
+            break
+        u, widen, weighted = u1, new, trial
+    return u, weighted, widen
+
+
 def _starting_points(spec, initial: dict, options: FitOptions, held: dict | None = None) -> np.ndarray:
     rng = np.random.default_rng(options.seed)
     held = held or {}
@@ -362,9 +422,9 @@ def fit(
     duration = float(measurement.t.max()) + 0.002 + 0.010  # room for the contact-time shift
     n_out = int(math.ceil(duration / options.solver.output_dt)) + 2
 
-    # the number of starts and their seed do not change the compiled solve: fits that
-    # differ only in those share it
-    compiled = dataclasses.replace(options, starts=1, seed=0)
+    # the number of starts, their seed and the reweighting do not change the compiled solve:
+    # fits that differ only in those share it
+    compiled = dataclasses.replace(options, starts=1, seed=0, misfit_weights=False)
     runs = []
     for k, u0 in enumerate(_starting_points(free, init, options, held)):
         if progress is not None:
@@ -379,16 +439,25 @@ def fit(
     at_best = int(np.sum(costs <= costs[best] + max(tol, 1e-3 * costs[best])))
     others = sorted({round(float(c), 6) for c in costs if np.isfinite(c) and c > costs[best] * 1.01 + 1e-6})
 
-    u = jnp.asarray(u_all[best])
+    u, converged = jnp.asarray(u_all[best]), bool(ok[best])
+    n = len(measurement.t)
+    rows = {name: c * n + np.flatnonzero(w[c] > 0) for c, name in enumerate(channels)}
+    widen = np.ones(len(channels))  # each channel's sigma multiplier in the fit's weights
+    if options.misfit_weights:
+        if progress is not None:
+            progress("fit: again, each channel weighted by its own misfit")
+        u, data, widen = _weighted_by_misfit(free, channels, n_out, compiled, data, u, rows, len(free) - len(held))
     r, jac_u, dvalue_du, traj, preds = _finish_jit(free, channels, n_out, compiled, data, u)
     r, jac_u, dvalue_du, preds = (np.asarray(a) for a in (r, jac_u, dvalue_du, preds))
+    # back to the recording's own sigmas: the covariance widens each channel by its misfit there
+    to_recording = np.concatenate([np.repeat(widen, n), np.ones(len(r) - len(channels) * n)])
+    r, jac_u = r * to_recording, jac_u * to_recording[:, None]
     fitted = [i for i, p in enumerate(free) if p.name not in held]
     jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
     spec_all, free = free, tuple(free[i] for i in fitted)
     n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
-    n = len(measurement.t)
-    rows = {name: c * n + np.flatnonzero(w[c] > 0) for c, name in enumerate(channels)}
-    unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), rows, n_res)
+    unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), rows, n_res,
+                               per_channel=options.misfit_weights)
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}
@@ -426,7 +495,7 @@ def fit(
         rms=rms,
         chi2=unc.chi2,
         dof=unc.dof,
-        converged=bool(ok[best]),
+        converged=converged,
         starts=len(costs),
         starts_at_best=at_best,
         other_minima=others,
@@ -438,6 +507,8 @@ def fit(
         measurement=measurement,
         model=model,
         correlation_time=unc.tau,
+        misfit=unc.misfit,
+        sigma_widened={c: float(f) for c, f in zip(channels, widen) if f > 1.0},
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
     )
     result.identified = {**assess_identifiability(result, channels),

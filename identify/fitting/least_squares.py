@@ -1,5 +1,6 @@
 """The fit's weighted least-squares pieces that do not depend on the crash model: a
-channel's residual rows, the residuals' correlation time, and the parameters' covariance.
+channel's residual rows, the residuals' correlation time, each channel's misfit, and the
+parameters' covariance.
 
 Pure functions over arrays; ``identify.fitting.collision_fit`` puts the model in front of them. Kept
 apart so that each can be checked against an independent reference (a linear problem's
@@ -59,14 +60,40 @@ def integrated_autocorrelation_time(residual: np.ndarray, max_lag: int = 50) -> 
     return max(1.0, 1.0 + 2.0 * total)
 
 
+def channel_variance_factors(r, channel_rows: dict, n_params: int) -> tuple[dict, dict]:
+    """Per channel, how much larger than its stated noise the residuals' variance is.
+
+    r : (m,) weighted residual rows (model - measured) / sigma; channel_rows : channel ->
+    indices of its valid rows in r; n_params : fitted parameters. Returns (tau, misfit),
+    channel -> value: tau the residuals' correlation time (samples,
+    :func:`integrated_autocorrelation_time`), misfit = max(1, chi2_c / dof_c), the channel's
+    reduced chi-square (dof_c = n_c (n - p) / n: the parameters' degrees of freedom shared
+    out in proportion to the rows). Their product is the factor by which the channel's
+    variance is widened: its rows weigh as n_c / tau_c independent samples of noise as large
+    as its misfit. A channel the model misses by far more than the tracker's noise (the heave
+    and pitch of a car the model simplifies) then no longer lends its misfit to the others."""
+    r = np.asarray(r, dtype=float)
+    n_data = sum(len(rows) for rows in channel_rows.values())
+    share = max(n_data - n_params, 1) / max(n_data, 1)
+    tau, misfit = {}, {}
+    for name, rows in channel_rows.items():
+        z = r[rows]
+        tau[name] = integrated_autocorrelation_time(z)
+        misfit[name] = max(1.0, float(z @ z) / max(len(rows) * share, 1e-300)) if len(rows) else 1.0
+    return tau, misfit
+
+
 @dataclasses.dataclass
 class Uncertainty:
     """Covariance of fitted parameters (physical units) and what it was made from.
 
     cov, std, corr : covariance (unit_i unit_j), standard deviations, correlations.
     chi2 : sum of squared residual rows; dof : residual count - fitted parameters.
-    scale : max(1, chi2/dof), the factor the covariance was widened by for a misfit larger
-        than the stated noise. tau : channel -> residual correlation time (samples).
+    tau : channel -> residual correlation time (samples); misfit : channel -> the factor
+        its variance was widened by for a misfit larger than its stated noise: max(1, the
+        channel's reduced chi-square) (:func:`channel_variance_factors`), or, widened as a
+        whole, every channel's and prior's ``scale``.
+    scale : max(1, chi2/dof) when the whole fit was widened by it (priors included), else 1.
     """
 
     cov: np.ndarray
@@ -74,39 +101,50 @@ class Uncertainty:
     corr: np.ndarray
     chi2: float
     dof: int
-    scale: float
     tau: dict
+    misfit: dict
+    scale: float = 1.0
 
 
-def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res: int) -> Uncertainty:
+def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res: int,
+                         per_channel: bool = True) -> Uncertainty:
     """Covariance of the fitted parameters at a least-squares optimum.
 
-    r : (m,) weighted residual rows at the optimum; jac_u : (m, p) their Jacobian with
-    respect to the unconstrained parameters u; dvalue_du : (p,) derivative of each physical
-    value with respect to its u (positive: the transforms are increasing); typical : (p,)
-    each parameter's typical magnitude (physical units); channel_rows : channel -> indices
-    of its valid rows in r (rows of no channel, the priors, are taken as independent);
-    n_res : number of residuals that carry information (valid samples and priors).
+    r : (m,) residual rows at the optimum, weighted by the recording's own sigmas; jac_u :
+    (m, p) their Jacobian with respect to the unconstrained parameters u; dvalue_du : (p,)
+    derivative of each physical value with respect to its u (positive: the transforms are
+    increasing); typical : (p,) each parameter's typical magnitude (physical units);
+    channel_rows : channel -> indices of its valid rows in r (rows of no channel, the priors,
+    are independent measurements taken at their stated sigma); n_res : number of residuals
+    that carry information (valid samples and priors); per_channel : False widens the whole
+    covariance by one factor instead, max(1, chi2/dof), the priors' rows included (what the
+    fit did before per-channel misfits: wider where one channel misses far beyond its noise,
+    which discovery's rules were set against, ``identify.discover.loop.CANDIDATE_FIT``).
 
-    Gauss-Newton: cov = scale * (J^T J)^-1 with J the Jacobian in physical units (J_u divided
-    by dvalue/du, the chain rule). Each channel's rows are divided by sqrt(tau), its
-    residuals' correlation time: n correlated samples weigh as n / tau independent ones. The
-    inversion runs on columns scaled to ``typical`` (well conditioned), and an eigenvalue
-    near 0 (a direction the data do not constrain) is floored, giving that direction a huge
-    variance, not the zero a pseudo-inverse would give it.
+    Gauss-Newton: cov = (J^T J)^-1 with J the Jacobian in physical units (J_u divided by
+    dvalue/du, the chain rule), each channel's rows divided by sqrt(tau_c misfit_c)
+    (:func:`channel_variance_factors`): n correlated samples weigh as n / tau independent
+    ones, and a channel's misfit beyond its noise widens that channel alone. A measured
+    prior (the contact seen in the film) keeps its own sigma, whatever another channel's
+    misfit. The inversion runs on columns scaled to ``typical`` (well conditioned), and an
+    eigenvalue near 0 (a direction the data do not constrain) is floored, giving that
+    direction a huge variance, not the zero a pseudo-inverse would give it.
     """
     r, jac_u, dvalue_du, typical = (np.asarray(a, dtype=float) for a in (r, jac_u, dvalue_du, typical))
     chi2 = float(r @ r)
     dof = max(int(n_res) - len(typical), 1)
-    scale = max(1.0, chi2 / dof)
-    tau = {name: integrated_autocorrelation_time(r[rows]) for name, rows in channel_rows.items()}
-    row_weight = np.ones(len(r))
+    tau, misfit = channel_variance_factors(r, channel_rows, len(typical))
+    scale = 1.0
+    if not per_channel:
+        scale = max(1.0, chi2 / dof)
+        misfit = {name: scale for name in channel_rows}
+    row_weight = np.full(len(r), 1.0 / math.sqrt(scale))
     for name, rows in channel_rows.items():
-        row_weight[rows] = 1.0 / math.sqrt(tau[name])
+        row_weight[rows] = 1.0 / math.sqrt(tau[name] * misfit[name])
     jac_s = row_weight[:, None] * jac_u / np.maximum(dvalue_du, 1e-300)[None, :] * typical[None, :]
     eigval, eigvec = np.linalg.eigh(jac_s.T @ jac_s)
     eigval = np.maximum(eigval, 1e-14 * max(float(eigval.max()), 1e-300))
-    cov = (eigvec / eigval) @ eigvec.T * scale * np.outer(typical, typical)
+    cov = (eigvec / eigval) @ eigvec.T * np.outer(typical, typical)
     std = np.sqrt(np.diag(cov))  # > 0: every eigenvalue was floored above 0
     corr = cov / np.outer(std, std)
-    return Uncertainty(cov=cov, std=std, corr=corr, chi2=chi2, dof=dof, scale=scale, tau=tau)
+    return Uncertainty(cov=cov, std=std, corr=corr, chi2=chi2, dof=dof, tau=tau, misfit=misfit, scale=scale)
