@@ -39,7 +39,7 @@ def test_result_json_has_the_interface_fields(fitted_folder):
         p = doc["parameters"][name]
         assert p["unit"] == unit and p["std_data"] > 0 and p["std"] == pytest.approx(np.hypot(p["std_data"], p["std_model"]))
         # the data fix all four; the model's own error on recordings it did not make leaves
-        # k_restitution (112 % on films, identify/fitting/model_error.json) not identified
+        # k_restitution (70 % on films, identify/fitting/model_error.json) not identified
         assert p["identified"] is (name != "k_restitution"), (name, p.get("reason"))
     assert "model's own error" in doc["parameters"]["k_restitution"]["reason"]
     assert doc["fit"]["model"] == "base"  # how good the fit is, is measured on the reference world
@@ -47,6 +47,18 @@ def test_result_json_has_the_interface_fields(fitted_folder):
     cov = np.array(doc["covariance"]["matrix"])
     assert cov.shape == (len(doc["covariance"]["names"]),) * 2 and np.allclose(cov, cov.T)
     assert set(doc["model_events_ms"]) >= {"rear_wheel_lift", "compression_end"}
+    # each fitted channel's misfit factor (at least 1) and, for those widened, its weight's
+    misfit, widened = doc["fit"]["misfit_by_channel"], doc["fit"]["sigma_widened_by_channel"]
+    assert set(misfit) == set(doc["fit"]["fitted_channels"]) and min(misfit.values()) >= 1.0
+    assert set(widened) <= set(misfit) and all(f > 1.0 for f in widened.values())
+
+
+def test_the_report_says_which_channels_were_weighted_by_their_misfit():
+    from identify.report.markdown import misfit_weights_sentence
+
+    assert misfit_weights_sentence({}) == ""
+    said = misfit_weights_sentence({"z_m": 37.9, "x_m": 1.2, "pitch_rad": 93.9})
+    assert "sigma pitch_rad x94, z_m x38, x_m x1.2 " in said and said.startswith(" Each channel was weighted")
 
 
 def test_results_folder_holds_tracks_plots_and_report(fitted_folder):

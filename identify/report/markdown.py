@@ -14,6 +14,18 @@ PARAMETER_ROWS = (
 MEASURED = {"impact_speed": ("impact speed", 3.6, "km/h"), "contact_time": ("first contact", 1e3, "ms")}
 
 
+def misfit_weights_sentence(widened: dict) -> str:
+    """' Channels ... weighted by their own misfit (...)' for ``result.json``'s
+    ``fit.sigma_widened_by_channel`` (channel -> the factor its sigma was multiplied by),
+    '' when none was: which channels the model misses beyond their noise, and by how much
+    less they counted in the fit than the tracker's sigmas say."""
+    if not widened:
+        return ""
+    parts = ", ".join(f"{name} x{factor:.2g}" for name, factor in sorted(widened.items(), key=lambda kv: -kv[1]))
+    return (f" Each channel was weighted by its own misfit, the model missing it beyond its noise: sigma {parts}"
+            " (the channels the model follows decide what they measure).")
+
+
 def prior_lines(priors: dict) -> list[str]:
     """One line per quantity known before the fit (``result.json``'s ``priors``): what was
     known, what the fit made of it and the pull (fitted - known) / sigma; the recording's
@@ -61,7 +73,7 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         f"Recording `{doc['recording']}` ({doc['recording_kind']}), impact speed"
         f" {doc['impact_speed_kmh']:.2f} km/h, model `{fitinfo['model']}`.",
         f"Fit: RMS {1e3 * fitinfo['rms_m']:.2f} mm in x, reduced chi-square {fitinfo['reduced_chi2']:.2f}"
-        f" ({starts}).",
+        f" ({starts}).{misfit_weights_sentence(fitinfo.get('sigma_widened_by_channel') or {})}",
         "",
         "## Parameters (the paper's Table 1, side by side)",
         "",
