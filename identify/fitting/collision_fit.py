@@ -288,12 +288,13 @@ def _weighted_by_misfit(spec, channels, n_out, options, data, u, rows: dict, n_f
     less than 10 % (at most ``MISFIT_ROUNDS`` fits): after the first, a channel's misfit is
     no longer inflated by the compromise the others forced on it. A weighted fit that does
     not converge within ``WEIGHTED_SOLVES`` runs of the solver is dropped, the last one that
-    did kept. Returns (u, data with the weights used, (n_channels,) sigma multipliers)."""
+    did kept. Returns (u, (n_channels,) sigma multipliers, :func:`_finish` at u with the
+    recording's own sigmas)."""
     w = np.asarray(data["w"])
-    widen, weighted = np.ones(len(channels)), data
+    widen = np.ones(len(channels))
+    finished = _finish_jit(spec, channels, n_out, options, data, u)
     for _ in range(MISFIT_ROUNDS):
-        r = np.asarray(_finish_jit(spec, channels, n_out, options, data, u)[0])
-        tau, misfit = channel_variance_factors(r, rows, n_fitted)
+        tau, misfit = channel_variance_factors(np.asarray(finished[0]), rows, n_fitted)
         new = np.array([math.sqrt(tau[c] * misfit[c]) for c in channels])
         if np.allclose(new, widen, rtol=0.1):
             break
@@ -304,8 +305,9 @@ def _weighted_by_misfit(spec, channels, n_out, options, data, u, rows: dict, n_f
                 break
         if not (bool(ok) and np.isfinite(float(cost))):
             break
-        u, widen, weighted = u1, new, trial
-    return u, weighted, widen
+        u, widen = u1, new
+        finished = _finish_jit(spec, channels, n_out, options, data, u)
+    return u, widen, finished
 
 
 def _starting_points(spec, initial: dict, options: FitOptions, held: dict | None = None) -> np.ndarray:
@@ -446,12 +448,12 @@ def fit(
     if options.misfit_weights:
         if progress is not None:
             progress("fit: again, each channel weighted by its own misfit")
-        u, data, widen = _weighted_by_misfit(free, channels, n_out, compiled, data, u, rows, len(free) - len(held))
-    r, jac_u, dvalue_du, traj, preds = _finish_jit(free, channels, n_out, compiled, data, u)
+        u, widen, finished = _weighted_by_misfit(free, channels, n_out, compiled, data, u, rows, len(free) - len(held))
+    else:
+        finished = _finish_jit(free, channels, n_out, compiled, data, u)
+    # residuals and Jacobian in the recording's own sigmas: the covariance widens each channel by its misfit there
+    r, jac_u, dvalue_du, traj, preds = finished
     r, jac_u, dvalue_du, preds = (np.asarray(a) for a in (r, jac_u, dvalue_du, preds))
-    # back to the recording's own sigmas: the covariance widens each channel by its misfit there
-    to_recording = np.concatenate([np.repeat(widen, n), np.ones(len(r) - len(channels) * n)])
-    r, jac_u = r * to_recording, jac_u * to_recording[:, None]
     fitted = [i for i, p in enumerate(free) if p.name not in held]
     jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
     spec_all, free = free, tuple(free[i] for i in fitted)
