@@ -192,8 +192,13 @@ def _nuisance_entry(fr: FitResult, name: str) -> dict:
 
 def _std_entry(fr: FitResult, name: str) -> dict:
     """A fitted quantity's standard deviations: ``std`` (what to quote), and its two parts,
-    the data's ``std_data`` and the model's own error ``std_model`` (``identify.fitting.model_error``)."""
-    return {"std": fr.std[name], "std_data": fr.std_data.get(name, fr.std[name]), "std_model": fr.std_model.get(name, 0.0)}
+    the data's ``std_data`` and the model's own error ``std_model`` (``identify.fitting.model_error``),
+    which holds ``model_choice_shift`` when discovery's mechanisms moved the parameter
+    (``identify.discover.loop.with_model_choice``)."""
+    entry = {"std": fr.std[name], "std_data": fr.std_data.get(name, fr.std[name]), "std_model": fr.std_model.get(name, 0.0)}
+    if name in fr.model_choice:
+        entry["model_choice_shift"] = fr.model_choice[name]
+    return entry
 
 
 def _unit(name):

@@ -61,6 +61,15 @@ def test_the_report_says_which_channels_were_weighted_by_their_misfit():
     assert "sigma pitch_rad x94, z_m x38, x_m x1.2 " in said and said.startswith(" Each channel was weighted")
 
 
+def test_the_report_says_how_far_discovery_moved_each_parameter():
+    from identify.report.markdown import model_choice_sentence
+
+    assert model_choice_sentence({"k_compression": {"value": 1e6, "unit": "N/m^3"}}) == ""
+    said = model_choice_sentence({"k_compression": {"value": 1e6, "unit": "N/m^3", "model_choice_shift": 2.5e6},
+                                  "restitution": {"value": 0.2, "unit": "", "model_choice_shift": 0.0}})
+    assert "(k_compression by 2.5e+06 N/m^3)" in said and "restitution" not in said
+
+
 def test_results_folder_holds_tracks_plots_and_report(fitted_folder):
     for name in ("tracks.csv", "displacement_velocity.png", "residuals.png", "silhouettes.png", "report.md"):
         assert (fitted_folder / name).stat().st_size > 100, name

@@ -12,6 +12,7 @@ share it)."""
 
 import dataclasses
 import json
+import math
 import types
 
 import numpy as np
@@ -88,6 +89,13 @@ def test_front_wheel_block_named_located_and_recovered(a4, block_case):
     assert result.final.rms_m == pytest.approx(NOISE["x_m"], rel=0.15)  # the noise level
     assert result.final.model == "base+front_wheel_block"
     assert [mech.effect for mech in result.final.params.mechanisms] == ["front_wheel_block"]
+    # the base parameters are quoted no closer than the two models agree (``with_model_choice``)
+    fr = result.final
+    assert {"k_compression", "restitution", "impact_speed"} <= set(fr.model_choice)
+    assert not any(n.startswith("front_wheel_block.") for n in fr.model_choice)
+    for n, shift in fr.model_choice.items():
+        assert fr.std_model[n] >= shift and fr.std[n] == pytest.approx(math.hypot(fr.std_data[n], fr.std_model[n]))
+    assert fr.model_choice["k_compression"] > 0
 
 
 def test_a_candidate_a_generic_force_explains_far_better_is_not_named(a4, block_case, monkeypatch):
@@ -125,6 +133,7 @@ def test_a_force_no_candidate_has_is_reported_unexplained(a4, unexplained_case):
     assert "away from the barrier" in d["explanation"] and "No candidate" in d["explanation"]
     assert d["rms_after_m"] < d["rms_before_m"] and d["bic_after"] < d["bic_before"] - 10
     assert "unexplained" in result.status
+    assert result.final.model_choice == {}  # nothing added to the model: nothing moved by it
 
 
 def test_result_entries_follow_the_interface_and_are_json(block_case):

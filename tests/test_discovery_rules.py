@@ -6,7 +6,9 @@ rule inverted or removed fails a test here:
 - one effective sample count per round for every candidate (:func:`score`, :func:`round_tau`);
 - the plausibility checks of a candidate's fit (``_plausible``) and the evidence checks
   against directly measured channels (each candidate's ``evidence``, ``identify.discover.candidates``);
-- the held-out prediction check (``_held_out_chi2``).
+- the held-out prediction check (``_held_out_chi2``);
+- a model discovery changed quoted no closer than it agrees with the base model
+  (:func:`with_model_choice`).
 
 Accuracy of discovery on data it did not make is measured on the reference world
 (``tests/test_discovery.py`` and ``benchmarks/accuracy.py``)."""
@@ -19,7 +21,8 @@ import numpy as np
 import pytest
 
 from identify.discover.candidates import neutral_values
-from identify.discover.loop import Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score, shape_check
+from identify.discover.loop import (Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score, shape_check,
+                                   with_model_choice)
 from identify.discover.candidates.front_wheel_block import front_wheels_blocked
 from identify.fitting.collision_fit import FitResult
 from identify.recordings.measurement import Measurement
@@ -565,3 +568,49 @@ def test_the_candidates_start_from_the_current_models_crush_and_stiffness():
     assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 0.0), (FRONT_ANGLE, 122.0))) == pytest.approx(0.06)
     assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 1.0), (FRONT_ANGLE, 122.0))) == pytest.approx(tyre)
     assert wheels_stop_turning(fr, vehicle, analysis((FRONT_ANGLE, 60.0))) == pytest.approx(tyre)  # 0.029 m: < 5 cm
+
+
+# ---------------------------------------------------------------- a model discovery changed: with_model_choice()
+
+def fitted(values, std_data, std_model, names=None):
+    """A FitResult of ``values`` with the data's and the model's standard deviations (the
+    fields ``with_model_choice`` reads; the rest left empty)."""
+    names = tuple(names or values)
+    std = {n: math.hypot(std_data[n], std_model.get(n, 0.0)) for n in names}
+    return FitResult(names=names, units={n: "N/m^3" if n.startswith("k_") else "" for n in names}, values=dict(values),
+                     std=std, covariance=np.diag([std[n] ** 2 for n in names]), correlation=np.eye(len(names)),
+                     identified={n: (True, "") for n in names if n in ("k_compression", "restitution")}, rms={},
+                     chi2=0.0, dof=1, converged=True, starts=1, starts_at_best=1, other_minima=[], params=None,
+                     speed=15.0, contact_time=0.0, trajectory=None, predictions={}, measurement=None,
+                     std_data=dict(std_data), std_model=dict(std_model))
+
+
+def test_a_parameter_discovery_moved_far_is_quoted_no_closer_than_the_two_models_agree():
+    base = fitted({"k_compression": 9.0e5, "restitution": 0.20}, {"k_compression": 3e4, "restitution": 0.002},
+                  {"k_compression": 1.2e5, "restitution": 0.01})
+    # the model with a (wrongly named) progressive law: k_compression 2.5 times the base's, restitution as good as unmoved
+    final = fitted({"k_compression": 3.2e6, "restitution": 0.203, "progressive_stiffness.progression": -1.5},
+                   {"k_compression": 5e4, "restitution": 0.002, "progressive_stiffness.progression": 0.1},
+                   {"k_compression": 0.137 * 3.2e6, "restitution": 0.01})
+    out = with_model_choice(final, base, ["progressive_stiffness"])
+    assert out.model_choice == pytest.approx({"k_compression": 2.3e6, "restitution": 0.003})
+    # the shift joins the model's own error in quadrature, and the total and the covariance follow
+    assert out.std_model["k_compression"] == pytest.approx(math.hypot(0.137 * 3.2e6, 2.3e6))
+    assert out.std["k_compression"] == pytest.approx(math.hypot(5e4, 0.137 * 3.2e6, 2.3e6))
+    assert np.sqrt(np.diag(out.covariance)) == pytest.approx([out.std[n] for n in out.names])
+    ok, why = out.identified["k_compression"]
+    assert not ok and "progressive stiffness" in why and "from 9e+05 to 3.2e+06" in why
+    # a parameter both models agree on keeps its std (nearly) and stays identified
+    assert out.identified["restitution"] == (True, "")
+    assert out.std["restitution"] == pytest.approx(math.hypot(0.002, 0.01, 0.003))
+    # the mechanism's own parameter has no base value to differ from
+    assert out.std["progressive_stiffness.progression"] == final.std["progressive_stiffness.progression"]
+    assert final.model_choice == {} and final.identified["k_compression"] == (True, "")  # a copy, not the input
+
+
+def test_a_parameter_discovery_barely_moved_stays_identified():
+    base = fitted({"k_compression": 9.0e5}, {"k_compression": 3e4}, {"k_compression": 1.2e5})
+    final = fitted({"k_compression": 9.3e5}, {"k_compression": 3e4}, {"k_compression": 1.27e5})
+    out = with_model_choice(final, base, ["front_wheel_block"])
+    assert out.identified["k_compression"] == (True, "")
+    assert out.std["k_compression"] == pytest.approx(math.hypot(3e4, 1.27e5, 3e4))

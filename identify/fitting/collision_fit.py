@@ -117,6 +117,9 @@ class FitResult:
     sigma_widened : channel -> the factor the fit's weights multiplied the channel's sigma by,
         for the channels widened (``FitOptions.misfit_weights``; empty when the fit used the
         recording's sigmas, also when the weighted fit did not converge).
+    model_choice : name -> how far the mechanisms discovery added moved a base parameter
+        from the base model's fit (its unit), counted in ``std_model``
+        (``identify.discover.loop.with_model_choice``); empty without discoveries.
     converged : the best start converged; starts_at_best : how many starts reached it;
     other_minima : costs of distinct worse minima found.
     params, speed, contact_time : the fitted model (sim.Params, m/s, s).
@@ -153,6 +156,7 @@ class FitResult:
     std_model: dict[str, float] = dataclasses.field(default_factory=dict)
     misfit: dict[str, float] = dataclasses.field(default_factory=dict)
     sigma_widened: dict[str, float] = dataclasses.field(default_factory=dict)
+    model_choice: dict[str, float] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 

@@ -26,6 +26,18 @@ def misfit_weights_sentence(widened: dict) -> str:
             " (the channels the model follows decide what they measure).")
 
 
+def model_choice_sentence(parameters: dict) -> str:
+    """' ... moved ...' for the parameters whose ``model_choice_shift`` (result.json; how far
+    the mechanisms discovery added moved them from the base model's fit) counts in their
+    std, '' when there is none."""
+    moved = {n: p["model_choice_shift"] for n, p in parameters.items() if p.get("model_choice_shift")}
+    if not moved:
+        return ""
+    parts = ", ".join(f"{n} by {v:.3g} {parameters[n].get('unit', '')}".rstrip() for n, v in moved.items())
+    return (f" It also holds how far the mechanisms discovery added moved each parameter from the base"
+            f" model's fit ({parts}): the choice of model is discovery's, not a measurement.")
+
+
 def prior_lines(priors: dict) -> list[str]:
     """One line per quantity known before the fit (``result.json``'s ``priors``): what was
     known, what the fit made of it and the pull (fitted - known) / sigma; the recording's
@@ -91,7 +103,8 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
             f" {_fmt(p.get('std'), scale, 2)}{u} | {_fmt(p.get('std_data'), scale, 2)}{u} | {status} |"
         )
     lines += ["", "The std adds to the data's the model's own error (`identify/fitting/model_error.py`):"
-              " how far the model's simplifications moved each parameter on recordings it did not make."]
+              " how far the model's simplifications moved each parameter on recordings it did not make."
+              + model_choice_sentence(doc["parameters"])]
     known = prior_lines(doc.get("priors") or {})
     if known:
         lines += ["", "## What was known before the fit", ""] + [f"- {k}" for k in known]
