@@ -140,6 +140,9 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
         # a second body the recording measured (engine accelerometers) is modelled, not discovered
         row["measured_effects"] = [e for e in doc["fit"]["model"].split("+")[1:] if e not in row["discovered"]]
         row["verdict"] = judge_discoveries(row["discovered"], [e["name"] for e in truth["effects"]])
+        # candidates whose fit ended worse than the model they extend: never asked (``Trial.settled``)
+        row["unsettled"] = sorted({t["effect"] for r in doc.get("discovery_rounds", []) for t in r
+                                   if not t.get("settled", True)})
         row["rms_mm"] = 1e3 * doc["fit"]["rms_m"]
     return row
 
@@ -194,6 +197,8 @@ def summary(rows: list[dict]) -> dict:
         out["effect_wrong_name_rate"] = float(np.mean([r["verdict"] in ("wrong", "right+wrong") for r in effect]))
         out["effect_unexplained_rate"] = float(np.mean([r["verdict"] == "unexplained" for r in effect]))
         out["effect_nothing_rate"] = float(np.mean([r["verdict"] == "none" for r in effect]))
+    if ok:  # the share of fitted worlds where discovery could not ask the recording about a candidate
+        out["unsettled_candidate_rate"] = float(np.mean([bool(r.get("unsettled")) for r in ok]))
     tr = [r["tracking"] for r in ok if r.get("tracking") and r["tracking"]["x_rms_mm"] is not None]
     if tr:
         out["tracking_x_rms_mm_median"] = float(np.median([t["x_rms_mm"] for t in tr]))

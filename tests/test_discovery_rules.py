@@ -106,6 +106,7 @@ class FakeFit:
     contact_time: float = 0.0
     at_bound: dict = dataclasses.field(default_factory=dict)
     units: dict = dataclasses.field(default_factory=dict)
+    chi2: float = 0.0
     PULL_CONFLICT = FitResult.PULL_CONFLICT
     pulls = FitResult.pulls
 
@@ -446,6 +447,36 @@ def test_score_leaves_every_trial_undecided_with_its_tau_scaled_chi2():
     zone = fit_with_residual(m, 0.0015, names=("k_compression", "z.depth", "z.k"), values=values)
     (tr,) = score({"stiffness_zone": zone}, current, {"x_m": 2.0})
     assert tr.chi2 == pytest.approx(200 * 1.5**2 / 2.0) and tr.accepted is False and tr.reason == "" and tr.cv_gain is None
+    assert tr.settled
+
+
+@pytest.mark.parametrize("ratio, settled", [(1.0, True), (0.5, True), (1.00005, True), (1.0002, False), (2.5, False)])
+def test_a_candidate_whose_fit_ends_worse_than_the_model_it_contains_is_not_settled(ratio, settled):
+    m = measurement()
+    current = fit_with_residual(m, 0.004, chi2=1000.0)
+    zone = fit_with_residual(m, 0.004, names=("k_compression", "z.depth", "z.k"), chi2=1000.0 * ratio,
+                             values={"stiffness_zone.depth": 0.4, "stiffness_zone.k_zone": 2e6})
+    (tr,) = score({"stiffness_zone": zone}, current, {"x_m": 1.0})
+    assert tr.settled is settled
+
+
+def test_an_unsettled_candidate_is_told_apart_from_one_the_recording_refutes():
+    unsettled = dataclasses.replace(trial("engine_impact", 4756.3), settled=False)
+    out = {t.effect: t for t in choose([unsettled, trial("stiffness_zone", 64.8)], 10.0, passing)}
+    assert not out["engine_impact"].accepted and out["engine_impact"].reason.startswith("not settled: ")
+    assert "BIC change +4756.3" in out["engine_impact"].reason
+    assert out["stiffness_zone"].reason == "BIC change +64.8 is not below -10"
+    # the status line names what was not asked, after what was found
+    from identify.discover.loop import _status
+
+    analysis = types.SimpleNamespace(white=False, windows=[types.SimpleNamespace(channel="z_m")])
+    said = _status([], analysis, analysis, [list(out.values())])
+    assert said.startswith("no missing physics justified: residuals are not white in z_m")
+    assert said.endswith("; not settled: engine_impact (the fit ended worse than the model without it: no verdict)")
+    assert "not settled" not in _status([], analysis, analysis, [[out["stiffness_zone"]]])
+    # a candidate the BIC justifies is vetted as any other, settled or not
+    justified = dataclasses.replace(trial("engine_impact", -40.0), settled=False)
+    assert choose([justified], 10.0, passing)[0].accepted
 
 
 @pytest.mark.parametrize("effect, over", [
