@@ -14,6 +14,7 @@ import numpy as np
 
 from identify.errors import UserError
 from identify.fitting.collision_fit import FitOptions, FitResult, fit as fit_measurement
+from identify.fitting.model import NUISANCE
 from identify.recordings.load import Recording, load_recording
 from identify.report.results import ResultsFolder, default_output_folder as default_output_folder
 
@@ -80,16 +81,20 @@ def free_parameters(measurement, speed_mps: float | None) -> tuple[tuple, dict[s
     """What the fit moves for this recording, and the collision parameters it holds fixed
     with the reason: the impact speed when the user gave it; dz_contact when the recording
     has neither pitch nor height (the force's height shows only there: a sensor recording's
-    X accelerometers say nothing of it), held at V-SIM's 0 m."""
+    X accelerometers say nothing of it), held at V-SIM's 0 m, and with it the barrier face's
+    friction (``mu_face``, a vertical force), held at V-SIM's 0."""
     from identify.fitting.model import base_parameters
 
     free, held = base_parameters(), {}
     if speed_mps is not None:
         free = tuple(p for p in free if p.name != "impact_speed")
     if not {"z_m", "pitch_rad"} & set(measurement.channels):
-        free = tuple(p for p in free if p.name != "dz_contact")
+        # the face's friction acts vertically: it too shows only in pitch and heave, held at V-SIM's 0
+        free = tuple(p for p in free if p.name not in ("dz_contact", "mu_face"))
         held["dz_contact"] = ("not identified: the recording has no pitch or height channel, and the height of the"
                               " contact force shows only in the car's pitch and heave; held at V-SIM's 0 m")
+        held["mu_face"] = ("not identified: the recording has no pitch or height channel, and the barrier face's"
+                           " friction, a vertical force, shows only there; held at V-SIM's 0")
     return free, held
 
 
@@ -103,12 +108,15 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
     from sim import events_ms
 
     params = {}
-    for name in COLLISION_PARAMETERS:
+    for name in (*COLLISION_PARAMETERS, "mu_face"):  # the face's friction: so --params rebuilds the fitted model
         if name not in fr.values:
             params[name] = {"value": float(getattr(fr.params, name)), "unit": _unit(name), "std": None,
                             "identified": False, "reason": (held or {}).get(name, "held fixed, not fitted")}  # fmt: skip
             continue
         ok, reason = fr.identified.get(name, (True, ""))
+        if ok:
+            reason = _barely_narrowed(fr, name)
+            ok = not reason
         entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name), "identified": ok}
         if not ok:
             entry["reason"] = reason
@@ -119,11 +127,8 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             ok, reason = fr.identified.get(key, (True, ""))
             if not ok:
                 params[key].update(identified=False, reason=reason)
-            elif key in fr.priors and fr.std[key] > PRIOR_NARROWING * fr.priors[key][1]:
-                mu, sigma = fr.priors[key]
-                params[key].update(identified=False, reason=(
-                    f"not identified: the fit barely narrows what was known before it ({mu:.4g} +-"
-                    f" {sigma:.2g} {fr.units[key]}; fitted +- {fr.std[key]:.2g} with the model's own error)"))
+            elif reason := _barely_narrowed(fr, key):
+                params[key].update(identified=False, reason=reason)
     model_events = {k: (v + fr.contact_time * 1e3 if v is not None else None) for k, v in events_ms(fr.trajectory).items()}
     tracks = recording.tracks
     doc = {
@@ -178,6 +183,19 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
 # a parameter with a prior counts as identified when the fit's std is below this share of the
 # prior's: the recording, not the prior, decides its value
 PRIOR_NARROWING = 0.5
+
+
+def _barely_narrowed(fr: FitResult, name: str) -> str:
+    """'not identified: ...' when ``name`` had a prior that is knowledge, not a measurement
+    of this recording (a vehicle file's engine mass, the face's friction), and the fit's std
+    is more than ``PRIOR_NARROWING`` of the prior's: the prior, not the recording, decided
+    it; '' otherwise."""
+    if name not in fr.priors or name in NUISANCE or fr.std[name] <= PRIOR_NARROWING * fr.priors[name][1]:
+        return ""
+    mu, sigma = fr.priors[name]
+    unit = f" {fr.units[name]}" if fr.units[name] != "1" else ""
+    return (f"not identified: the fit barely narrows what was known before it ({mu:.4g} +- {sigma:.2g}{unit};"
+            f" fitted +- {fr.std[name]:.2g} with the model's own error)")
 
 
 def _nuisance_entry(fr: FitResult, name: str) -> dict:

@@ -15,6 +15,14 @@ moment about the CG is -dz' * F * cos(pitch) (~ -dz' * F): nose down for dz' < 0
   contact.
 
 The force acts horizontally on the body at the contact point, away from the barrier.
+
+Friction on the barrier face (``Params.mu_face``, 0 in V-SIM): as the car pitches, the
+contact point, l_f ahead of the CG, slides up or down the face, and friction opposes it with
+a vertical force of at most mu_face * F. It is applied per step as an impulse on the
+point's vertical velocity (Moreau's velocity-level Coulomb friction): the impulse that would
+stop the point's sliding, held within mu_face * F * dt by a tanh, so a sticking point (the
+usual case: a crushed front pressed into the face) holds at any step size where a force
+law mu F sign(v) would need a very small one.
 """
 
 from __future__ import annotations
@@ -64,3 +72,39 @@ def unloading_force(crush, crush_max, energy_absorbed, params, vehicle):
     residual_crush = crush_max - elastic
     in_contact = crush > 0.0
     return jnp.where(in_contact, k_r * jnp.maximum(crush - residual_crush, 0.0), 0.0)
+
+
+def face_point_jacobian(q, dz_contact, front_to_cg):
+    """(3,) dZ_c/dq: how the contact point's height moves with [x, z, pitch].
+
+    The point is ``front_to_cg`` (m) ahead of the CG and ``dz_contact`` (m) above it in the
+    body frame; with pitch nose-down positive, Z_c = z - l_f sin(pitch) + dz' cos(pitch).
+    """
+    s, c = jnp.sin(q[2]), jnp.cos(q[2])
+    return jnp.stack([jnp.zeros_like(s), jnp.ones_like(s), -front_to_cg * c - dz_contact * s])
+
+
+def face_friction_impulse(v_trial, inv_mass, jac_z, force, mu_face, dt):
+    """N s, the vertical friction impulse the barrier face gives the contact point in a step.
+
+    Parameters
+    ----------
+    v_trial : (3,) m/s, m/s, rad/s, the velocity at the step's end without face friction.
+    inv_mass : (3,) the inverse of the diagonal mass matrix (1/kg, 1/kg, 1/(kg m^2)).
+    jac_z : (3,) :func:`face_point_jacobian`.
+    force : N, the barrier's (horizontal) contact force in the step, >= 0.
+    mu_face : 1, the face's friction coefficient.
+    dt : s, the step.
+
+    Returns
+    -------
+    The impulse P (N s, up positive) on the contact point: -P_max tanh(m_eff v_c / P_max)
+    with P_max = mu_face * force * dt, v_c = jac_z @ v_trial and m_eff the point's effective
+    mass; it stops a slow point (sticking) and is P_max against a fast one (sliding).
+    """
+    cap = mu_face * force * dt
+    m_eff = 1.0 / (jac_z @ (inv_mass * jac_z))
+    stopping = m_eff * (jac_z @ v_trial)
+    positive = cap > 1e-12
+    safe_cap = jnp.where(positive, cap, 1.0)
+    return jnp.where(positive, -safe_cap * jnp.tanh(stopping / safe_cap), 0.0)

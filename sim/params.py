@@ -29,10 +29,13 @@ UNITS = {
     "mu_slip": "1",
     "mu_adhesion": "1",
     "rolling_resistance": "1",
+    "mu_face": "1",
 }
 REQUIRED = ("k_compression", "k_restitution", "restitution", "dz_contact")
 # Table 1 of the paper gives the same tyre coefficients for default and identified data.
 TYRE_DEFAULTS = {"mu_slip": 0.8, "mu_adhesion": 0.9, "rolling_resistance": 0.015}
+# V-SIM's contact force is horizontal: no friction on the barrier face unless one is given.
+FACE_DEFAULTS = {"mu_face": 0.0}
 
 
 class Params(eqx.Module):
@@ -47,6 +50,10 @@ class Params(eqx.Module):
     mu_slip : 1, friction coefficient of a sliding (blocked) tyre.
     mu_adhesion : 1, friction coefficient of a blocked tyre at vanishing sliding speed.
     rolling_resistance : 1, rolling-resistance coefficient of a turning wheel.
+    mu_face : 1, Coulomb friction coefficient between the crushed front and the barrier
+        face: a vertical force at the contact point, at most mu_face times the barrier force,
+        opposing the point's sliding along the face (``sim.contact.face_friction_impulse``);
+        0 in V-SIM and the paper.
     mechanisms : tuple of :class:`sim.mechanisms.Mechanism`, applied in order.
     """
 
@@ -57,11 +64,13 @@ class Params(eqx.Module):
     mu_slip: jnp.ndarray
     mu_adhesion: jnp.ndarray
     rolling_resistance: jnp.ndarray
+    mu_face: jnp.ndarray = 0.0
     mechanisms: tuple[Mechanism, ...] = ()
 
 
 def make_params(mechanisms: tuple[Mechanism, ...] = (), **values: float) -> Params:
-    """Build a validated Params from numbers (tyre coefficients default to Table 1's).
+    """Build a validated Params from numbers (tyre coefficients default to Table 1's, the
+    barrier face's friction to none).
 
     Raises ConfigError on a missing, unknown or invalid field.
     """
@@ -71,7 +80,7 @@ def make_params(mechanisms: tuple[Mechanism, ...] = (), **values: float) -> Para
     missing = [name for name in REQUIRED if name not in values]
     if missing:
         raise ConfigError(f"missing parameter {missing[0]!r}")
-    full = {**TYRE_DEFAULTS, **values}
+    full = {**TYRE_DEFAULTS, **FACE_DEFAULTS, **values}
     params = Params(**{k: jnp.asarray(full[k], dtype=float) for k in UNITS}, mechanisms=tuple(mechanisms))
     validate_params(params)
     return params
@@ -99,7 +108,7 @@ def validate_params(params: Params) -> None:
     bad("k_restitution", v["k_restitution"] <= 0, "must be > 0 N/m^3")
     bad("restitution", (v["restitution"] < 0) | (v["restitution"] > 1), "is outside [0, 1]")
     bad("dz_contact", jnp.abs(v["dz_contact"]) > 1.0, "is more than 1 m from the CG")
-    for name in ("mu_slip", "mu_adhesion", "rolling_resistance"):
+    for name in ("mu_slip", "mu_adhesion", "rolling_resistance", "mu_face"):
         bad(name, (v[name] < 0) | (v[name] > 2), "is outside [0, 2]")
     too_elastic = v["restitution"] ** 2 > v["k_restitution"] / v["k_compression"]
     bad(

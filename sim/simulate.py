@@ -3,7 +3,7 @@
 Planar rigid body with coordinates q = [x, z, pitch] (CG displacement from first contact,
 x towards the barrier, z up; pitch nose-down positive) and diagonal mass matrix
 diag(m, m, I). Forces: the hysteretic barrier contact (``sim.contact``), axles and tyres
-(``sim.ground``), gravity, and the optional mechanisms of ``Params.mechanisms``.
+(``sim.ground``), the barrier face's friction (``Params.mu_face``), gravity, and the optional mechanisms of ``Params.mechanisms``.
 
 Integration: fixed-step symplectic (semi-implicit) Euler, velocities living at half
 steps (leapfrog: positions are second-order accurate), ``Solver.dt`` substeps inside a
@@ -26,7 +26,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from sim.contact import contact_geometry, loading_force, unloading_force
+from sim.contact import contact_geometry, face_friction_impulse, face_point_jacobian, loading_force, unloading_force
 from sim.errors import ConfigError
 from sim.ground import ground_forces
 from sim.params import Params, validate_params
@@ -159,6 +159,8 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     force = load_fraction * f_load + (1.0 - load_fraction) * f_unload
 
     v_new = v + dt * (accel_other + force * accel_per_newton)
+    jac_z = face_point_jacobian(q, params.dz_contact, vehicle.cg_to_front_axle + vehicle.front_overhang)
+    v_new = v_new + inv_mass * jac_z * face_friction_impulse(v_new, inv_mass, jac_z, force, params.mu_face, dt)
     v_mid = 0.5 * (v + v_new)  # the velocity at the current time (leapfrog)
     q_new = q + dt * v_new
     crush_new, jac_new = contact_geometry(q_new, params.dz_contact)

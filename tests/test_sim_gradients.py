@@ -10,6 +10,7 @@ import pytest
 
 from helpers import central_difference_jacobian
 from sim import FrontWheelBlock, ProgressiveStiffness, RateDependence, StiffnessZone, Solver, make_params
+from sim.params import UNITS
 from sim.simulate import _run_jit
 
 NAMES = [
@@ -68,10 +69,8 @@ def test_vmap_over_parameter_sets_equals_single_runs(a4):
     ks = jnp.array([800e3, 970e3, 1200e3])
     base = make_params(k_compression=970e3, k_restitution=600e3, restitution=0.17, dz_contact=-0.21)
     batch = dataclasses.replace(
-        base, k_compression=ks, **{k: jnp.full(3, getattr(base, k)) for k in
-                                    ("k_restitution", "restitution", "dz_contact", "mu_slip", "mu_adhesion",
-                                     "rolling_resistance")}
-    )  # fmt: skip
+        base, k_compression=ks, **{k: jnp.full(3, getattr(base, k)) for k in UNITS if k != "k_compression"}
+    )
     runs = jax.vmap(lambda p: _run_jit(p, a4, 15.64, N_OUT, Solver()))(batch)
     for i, k in enumerate(ks):
         single = simulate(dataclasses.replace(base, k_compression=k), a4, 15.64, duration=0.11)

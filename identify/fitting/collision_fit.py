@@ -41,7 +41,15 @@ from identify.fitting.least_squares import (
     prior_residuals,
     weighted_offset,
 )
-from identify.fitting.model import OFFSET_FREE, FreeParameter, assemble, base_parameters, predict, vehicle_with
+from identify.fitting.model import (
+    FACE_FRICTION_PRIOR,
+    OFFSET_FREE,
+    FreeParameter,
+    assemble,
+    base_parameters,
+    predict,
+    vehicle_with,
+)
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
 
@@ -68,6 +76,12 @@ START_RANGES = {
     "restitution": (0.05, 0.4),
     "dz_contact": (-0.3, 0.1),
 }
+# Every start's face friction (1): a nose sliding on the face decides it, one that sticks
+# (above the few hundredths that hold it) barely does, so a fit started high on a sliding nose
+# finds no way down, while one started low climbs to sticking where the motion asks for it
+# and the prior (FACE_FRICTION_PRIOR) carries it on; V-SIM's 0 would start the logit where it
+# is flat.
+FACE_FRICTION_START = 0.01
 
 
 @dataclasses.dataclass(frozen=True)
@@ -400,6 +414,7 @@ def fit(
         **{n: float(getattr(template, n)) for n in ("k_compression", "k_restitution", "restitution", "dz_contact")},
         "impact_speed": speed_guess,
         "contact_time": 0.0,
+        "mu_face": FACE_FRICTION_START,
         **(initial or {}),
     }
     priors = dict(priors or {})
@@ -410,6 +425,8 @@ def fit(
     names = {p.name for p in free} - set(held)
     if speed_mps is None and measurement.impact_speed_sigma and "impact_speed" in names:
         priors.setdefault("impact_speed", (float(speed_guess), float(measurement.impact_speed_sigma)))
+    if "mu_face" in names:  # prior knowledge, not a measurement (FACE_FRICTION_PRIOR)
+        priors.setdefault("mu_face", FACE_FRICTION_PRIOR)
     if measurement.contact_time_sigma and "contact_time" in names:
         priors.setdefault("contact_time", (float(measurement.contact_time_s), float(measurement.contact_time_sigma)))
     data = dict(

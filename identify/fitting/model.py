@@ -33,7 +33,9 @@ class FreeParameter:
 
     value = transform(u): ``log``: scale * exp(u) (> 0); ``logit``: lower + (upper - lower) *
     sigmoid(u); ``tanh``: centre + scale * tanh(u) (|value - centre| < scale); ``linear``:
-    centre + scale * u.
+    centre + scale * u. ``floor_is_physical``: the lower bound is a law of physics, not a
+    range the fit was given (a friction coefficient is >= 0), so a value there is what the
+    recording says (none), not a value the bound stopped (:meth:`at_bound`).
     """
 
     name: str
@@ -43,6 +45,7 @@ class FreeParameter:
     centre: float = 0.0
     lower: float = 0.0
     upper: float = 1.0
+    floor_is_physical: bool = False
 
     @property
     def typical(self) -> float:
@@ -84,7 +87,7 @@ class FreeParameter:
         else:
             return ""
         share = (float(value) - lo) / (hi - lo)
-        if share <= self.AT_BOUND:
+        if share <= self.AT_BOUND and not self.floor_is_physical:
             return f"at its lower bound {lo:.4g} {self.unit}"
         if share >= 1.0 - self.AT_BOUND:
             return f"at its upper bound {hi:.4g} {self.unit}"
@@ -105,14 +108,24 @@ class FreeParameter:
 
 SPEED_SCALE = 10.0  # m/s; a fixed scale keeps the compiled fit the same for every recording
 
+# What is known of the barrier face's friction coefficient before a fit (value, sigma): dry
+# steel on concrete, steel or plywood, the faces of crash barriers, slides at 0.2-0.6. A
+# crushed front pressed into the face sticks wherever the coefficient exceeds the few
+# hundredths that hold it (reference worlds: 0.02-0.03), so above that the motion barely
+# tells one value from another and this prior keeps the fit from wandering; a recording of a
+# car whose nose slides freely pulls it towards 0.
+FACE_FRICTION_PRIOR = (0.3, 0.15)
+
 
 def base_parameters() -> tuple[FreeParameter, ...]:
-    """The four collision parameters of the paper and the two nuisance parameters."""
+    """The four collision parameters of the paper, the barrier face's friction (``mu_face``,
+    with the prior ``FACE_FRICTION_PRIOR``) and the two nuisance parameters."""
     return (
         FreeParameter("k_compression", "N/m^3", "log", scale=1e6),
         FreeParameter("k_restitution", "N/m^3", "log", scale=1e6),
         FreeParameter("restitution", "1", "logit", lower=0.0, upper=1.0),
         FreeParameter("dz_contact", "m", "tanh", scale=0.6),
+        FreeParameter("mu_face", "1", "logit", lower=0.0, upper=1.0, floor_is_physical=True),
         FreeParameter("impact_speed", "m/s", "log", scale=SPEED_SCALE),
         FreeParameter("contact_time", "s", "tanh", scale=CONTACT_TIME_RANGE),
     )

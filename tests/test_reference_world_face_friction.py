@@ -1,0 +1,91 @@
+"""The barrier face's friction, measured on data our model did not make: the reference
+world's car (``synth``) rubs its crushed front on the face (Coulomb friction, a coefficient
+of 0.1-0.4) and, like a real car, carries an engine on mounts, unsprung wheels and a curved
+unloading law. Fitted to its true motion (the tracker's noise, no film: this is the model's
+own error), the model without face friction put the contact force's height 0.029-0.075 m
+above the truth on 10 of 11 development worlds (seeds 960600-960610) and missed the heave by
+3-17 mm RMS (README, "The collision model"). Seed 305 (tests use seeds below 1000): its force
+acts 0.076 m below the CG, where the face's friction matters, and its coefficient is 0.18."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+SEED = 305
+DURATION = 0.2  # s after first contact
+NOISE = {"x_m": 3e-4, "z_m": 3e-4, "pitch_rad": 5e-4}  # a good film's tracker sigmas
+
+
+@pytest.fixture(scope="module")
+def world_motion(tmp_path_factory):
+    from identify.recordings.measurement import Measurement
+    from sim import load_vehicle
+    from synth.physics import simulate_reference
+    from synth.vehicle import car_to_toml
+    from synth.world import make_world
+
+    world = make_world(SEED, "clean")
+    motion = simulate_reference(world.car, world.params, world.v0, duration=DURATION, fps=1000.0)
+    before = -1e-3 * np.arange(20, 0, -1)
+    t = np.concatenate([before, motion.t])
+    true = {"x_m": np.concatenate([world.v0 * before, motion.x]),
+            "z_m": np.concatenate([0 * before, motion.z]),
+            "pitch_rad": np.concatenate([0 * before, motion.pitch])}
+    rng = np.random.default_rng(SEED)
+    m = Measurement(t=t, channels={k: v + rng.normal(0, NOISE[k], len(t)) for k, v in true.items()},
+                    sigma={k: np.full(len(t), s) for k, s in NOISE.items()},
+                    impact_speed_mps=world.v0, impact_speed_sigma=1e-3 * world.v0,
+                    contact_time_s=0.0, contact_time_sigma=2e-4, source=f"reference world {SEED}")
+    path = tmp_path_factory.mktemp("face") / "vehicle.toml"
+    path.write_text(car_to_toml(world.car))
+    return m, load_vehicle(path), world.params
+
+
+def _fit(world_motion, with_face_friction: bool):
+    from identify.fitting.collision_fit import FitOptions, fit
+    from identify.fitting.model import base_parameters
+
+    m, vehicle, _ = world_motion
+    free = tuple(p for p in base_parameters() if with_face_friction or p.name != "mu_face")
+    return fit(m, vehicle, free=free, options=FitOptions(starts=2))
+
+
+@pytest.mark.slow
+def test_the_contact_height_and_the_heave_come_out_right_with_the_faces_friction(world_motion):
+    _, _, truth = world_motion
+    assert truth.mu_face > 0.1  # the world rubs its front on the face
+    fr = _fit(world_motion, with_face_friction=True)
+    assert abs(fr.values["dz_contact"] - truth.dz_contact) < 0.02
+    assert fr.rms["z_m"] < 3e-3
+    assert abs(fr.values["k_compression"] / truth.k_compression - 1) < 0.03
+    # the nose sticks: the motion cannot tell 0.3 from the truth, so the prior decides
+    assert fr.values["mu_face"] > 0.05
+    # without it the model, V-SIM's, misses the heave and pays for it with the contact height
+    vsim = _fit(world_motion, with_face_friction=False)
+    assert vsim.rms["z_m"] > 3 * fr.rms["z_m"]
+    assert vsim.values["dz_contact"] - truth.dz_contact > 0.025
+
+
+@pytest.mark.slow
+def test_a_nose_that_slides_freely_pulls_the_friction_to_zero(world_motion):
+    # the same world with a frictionless face: the fit must find no friction, not the prior's
+    from identify.fitting.collision_fit import FitOptions, fit
+    from identify.recordings.measurement import Measurement
+    from synth.physics import simulate_reference
+    from synth.world import make_world
+
+    m, vehicle, truth = world_motion
+    world = make_world(SEED, "clean")
+    motion = simulate_reference(world.car, dataclasses.replace(truth, mu_face=0.0), world.v0, duration=DURATION)
+    n = len(m.t) - len(motion.t)
+    channels = {"x_m": np.concatenate([m.channels["x_m"][:n], motion.x]),
+                "z_m": np.concatenate([np.zeros(n), motion.z]),
+                "pitch_rad": np.concatenate([np.zeros(n), motion.pitch])}
+    slid = dataclasses.replace(m, channels=channels)
+    assert isinstance(slid, Measurement)
+    fr = fit(slid, vehicle, options=FitOptions(starts=2))
+    assert fr.values["mu_face"] < 0.02
+    assert fr.pulls()["mu_face"]["pull"] < -1.5  # the recording, not the prior, set it
