@@ -14,6 +14,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from identify.identification import _barely_narrowed
+
 SEED = 305
 DURATION = 0.2  # s after first contact
 NOISE = {"x_m": 3e-4, "z_m": 3e-4, "pitch_rad": 5e-4}  # a good film's tracker sigmas
@@ -61,8 +63,10 @@ def test_the_contact_height_and_the_heave_come_out_right_with_the_faces_friction
     assert abs(fr.values["dz_contact"] - truth.dz_contact) < 0.02
     assert fr.rms["z_m"] < 3e-3
     assert abs(fr.values["k_compression"] / truth.k_compression - 1) < 0.03
-    # the nose sticks: the motion cannot tell 0.3 from the truth, so the prior decides
+    # the nose sticks: the motion cannot tell 0.3 from the truth, so the prior decides, and
+    # the result says the coefficient is not identified
     assert fr.values["mu_face"] > 0.05
+    assert "barely narrows" in _barely_narrowed(fr, "mu_face")
     # without it the model, V-SIM's, misses the heave and pays for it with the contact height
     vsim = _fit(world_motion, with_face_friction=False)
     assert vsim.rms["z_m"] > 3 * fr.rms["z_m"]
@@ -89,3 +93,4 @@ def test_a_nose_that_slides_freely_pulls_the_friction_to_zero(world_motion):
     fr = fit(slid, vehicle, options=FitOptions(starts=2))
     assert fr.values["mu_face"] < 0.02
     assert fr.pulls()["mu_face"]["pull"] < -1.5  # the recording, not the prior, set it
+    assert _barely_narrowed(fr, "mu_face") == "" and "mu_face" not in fr.at_bound  # a finding: none
