@@ -21,8 +21,11 @@ contact point, l_f ahead of the CG, slides up or down the face, and friction opp
 a vertical force of at most mu_face * F. It is applied per step as an impulse on the
 point's vertical velocity (Moreau's velocity-level Coulomb friction): the impulse that would
 stop the point's sliding, held within mu_face * F * dt by a tanh, so a sticking point (the
-usual case: a crushed front pressed into the face) holds at any step size where a force
-law mu F sign(v) would need a very small one.
+usual case: a crushed front pressed into the face) holds at the model's step where a force
+law mu F sign(v) would need a far smaller one. The tanh is not a clamp: near the limit of
+sticking the point creeps (at half the limit, by 5 % of the speed the capped impulse would
+take away), so friction there acts a little weaker than mu_face. The lever arm is the
+undeformed front's, l_f, not l_f minus the crush (as the reference world's is too).
 """
 
 from __future__ import annotations

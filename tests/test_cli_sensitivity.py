@@ -45,6 +45,8 @@ def write_result(folder, covariance=True, vehicle="audi_a4"):
         "events_ms": {"front_wheel_block": 47.0},
     }
     doc["parameters"]["mu_slip"] = {"value": 0.8, "unit": "1", "std": None, "identified": False}
+    doc["parameters"]["mu_face"] = {"value": 0.3, "unit": "1", "std": 0.15, "identified": False,
+                                    "reason": "not identified: the fit barely narrows what was known before it"}
     doc["parameters"]["front_wheel_block.depth"] = {"value": 0.583, "unit": "m", "std": 0.01, "identified": True}
     if covariance:
         doc["covariance"] = {"names": COV_NAMES, "matrix": cov.tolist()}
@@ -250,3 +252,13 @@ def test_discovered_mechanisms_and_vehicle_changes_are_rebuilt(tmp_path):
     assert float(zone.depth) == 0.4 and float(zone.k_zone) == 2.5e6
     assert not any("rear_axle_lift" in n and "left out" in n for n in notes), notes
     assert speed == pytest.approx(56.3 / 3.6)
+
+
+def test_result_with_stds_alone_holds_what_is_no_input(tmp_path):
+    # without a covariance the parameters' std are sampled; the barrier face's friction has a
+    # std in result.json but is no input of the study: held at its value, and said so
+    folder = write_result(tmp_path / "r", covariance=False)
+    assert main(["sensitivity", str(folder), *FAST]) == 0
+    doc = json.loads((folder / "sensitivity" / "sensitivity.json").read_text())
+    assert doc["source"]["sampling"] == "std"
+    assert any("mu_face" in note for note in doc["notes"])

@@ -218,7 +218,10 @@ def load_result(result_dir: Path, speed_kmh, notes):
         values[name] = float(value)
         std = entry.get("std") if isinstance(entry, dict) else None
         if isinstance(std, (int, float)) and math.isfinite(std) and std > 0:
-            stds[name] = float(std)
+            if name in INPUTS:
+                stds[name] = float(std)
+            else:  # a parameter of the fitted model that is no input here (the barrier face's friction)
+                notes.append(f"{name} is not an input of the sensitivity study: held at its fitted value")
     overrides = _vehicle_overrides(table)
     if overrides:
         from identify.fitting.model import vehicle_with

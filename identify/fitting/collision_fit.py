@@ -369,7 +369,8 @@ def fit(
     measurement : identify.Measurement (t = 0 at the measured first contact).
     vehicle : sim.Vehicle.
     template : the fixed parameters and mechanisms (default: V-SIM's defaults, no mechanisms).
-    free : what to fit (default: the four collision parameters, impact speed, contact time).
+    free : what to fit (default: ``base_parameters()``: the four collision parameters, the barrier
+        face's friction, impact speed, contact time).
     initial : physical starting values by name (default: the template's; speed measured).
     speed_mps : impact speed (m/s) if known; else the measurement's; a measured speed with a
         sigma enters as a prior, a given one is held fixed.
