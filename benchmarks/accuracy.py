@@ -59,13 +59,15 @@ def world_plan(n: int, effect: str | None = None, base: int = SEED_BASE) -> list
 ENGINE = {"engine_impact.engine_mass": "engine_mass", "engine_impact.gap": "engine_gap"}
 
 
-def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
-    """Make one world, fit it, score it; never raises (a failure is a row)."""
+def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction: bool = False) -> dict:
+    """Make one world, fit it, score it; never raises (a failure is a row). ``face_friction``:
+    as ``identify fit --face-friction``."""
     import jax
 
     jax.config.update("jax_enable_x64", True)
     import identify
     from identify.cli import _bad_input_types as bad_input_types
+    from identify.fitting.collision_fit import FitOptions
     from synth.scoring import judge_discoveries, tracking_errors
     from synth.world import make_world, write_world
 
@@ -87,7 +89,8 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None) -> dict:
         fps = truth["fps"] if fmt == "film" else None  # the lab knows its camera's rate
         try:
             ident = identify.fit(folder / truth["recording"], folder / "vehicle.toml", fps=fps,
-                                 tape_segment=truth.get("tape_segment") or 0.1, write=False, discover=True)
+                                 tape_segment=truth.get("tape_segment") or 0.1, write=False, discover=True,
+                                 options=FitOptions(face_friction=face_friction))
         except bad_input_types() as err:  # what the command line answers with one line and exit 2
             row.update(status="refused", error=str(err), t_fit_s=time.perf_counter() - t1)
             return row
@@ -299,6 +302,7 @@ def main(argv=None) -> int:
                     help=f"the calibration worlds (seeds from {CALIBRATION_SEED_BASE}) instead of the scored ones")
     ap.add_argument("--json", type=Path, default=None, help="write every row and the summary here")
     ap.add_argument("--keep", type=Path, default=None, help="keep the worlds' folders here")
+    ap.add_argument("--face-friction", action="store_true", help="fit as 'identify fit --face-friction'")
     ap.add_argument("--table", type=Path, default=None, help="only print the table and summary of a --json file")
     a = ap.parse_args(argv)
     if a.table:
@@ -309,7 +313,7 @@ def main(argv=None) -> int:
     if a.keep:
         a.keep.mkdir(parents=True, exist_ok=True)
     base = CALIBRATION_SEED_BASE if a.calibration else SEED_BASE
-    plan = [(seed, effect, a.format, a.keep) for seed, effect in world_plan(a.n, a.effect, base)]
+    plan = [(seed, effect, a.format, a.keep, a.face_friction) for seed, effect in world_plan(a.n, a.effect, base)]
     t0 = time.perf_counter()
     rows = []
     partial = a.json.with_suffix(".partial.jsonl") if a.json else None

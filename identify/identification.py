@@ -77,15 +77,19 @@ def car_geometry_of(vehicle):
     )
 
 
-def free_parameters(measurement, speed_mps: float | None) -> tuple[tuple, dict[str, str]]:
+def free_parameters(measurement, speed_mps: float | None, face_friction: bool = False) -> tuple[tuple, dict[str, str]]:
     """What the fit moves for this recording, and the collision parameters it holds fixed
     with the reason: the impact speed when the user gave it; dz_contact when the recording
     has neither pitch nor height (the force's height shows only there: a sensor recording's
     X accelerometers say nothing of it), held at V-SIM's 0 m, and with it the barrier face's
-    friction (``mu_face``, a vertical force), held at V-SIM's 0."""
+    friction (``mu_face``, a vertical force), held at V-SIM's 0, as it is unless
+    ``face_friction`` (``FitOptions.face_friction``)."""
     from identify.fitting.model import base_parameters
 
-    free, held = base_parameters(), {}
+    free, held = base_parameters(face_friction), {}
+    if not face_friction:
+        held["mu_face"] = ("not fitted: V-SIM's model has no friction on the barrier face (0);"
+                           " 'identify fit --face-friction' fits it")
     if speed_mps is not None:
         free = tuple(p for p in free if p.name != "impact_speed")
     if not {"z_m", "pitch_rad"} & set(measurement.channels):
@@ -389,7 +393,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
     from identify.fitting.wheel_spin import without_spinning_wheels
 
     rec = dataclasses.replace(rec, measurement=without_spinning_wheels(rec.measurement, float(veh.wheel_radius)))
-    free, held = free_parameters(rec.measurement, speed_mps)
+    free, held = free_parameters(rec.measurement, speed_mps, options.face_friction)
     found = None
     if discover:
         from identify.discover.loop import CANDIDATE_FIT, discover as discover_missing, fit_base

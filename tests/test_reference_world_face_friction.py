@@ -48,11 +48,9 @@ def world_motion(tmp_path_factory):
 
 def _fit(world_motion, with_face_friction: bool):
     from identify.fitting.collision_fit import FitOptions, fit
-    from identify.fitting.model import base_parameters
 
     m, vehicle, _ = world_motion
-    free = tuple(p for p in base_parameters() if with_face_friction or p.name != "mu_face")
-    return fit(m, vehicle, free=free, options=FitOptions(starts=2))
+    return fit(m, vehicle, options=FitOptions(starts=2, face_friction=with_face_friction))
 
 
 @pytest.mark.slow
@@ -90,7 +88,21 @@ def test_a_nose_that_slides_freely_pulls_the_friction_to_zero(world_motion):
                 "pitch_rad": np.concatenate([np.zeros(n), motion.pitch])}
     slid = dataclasses.replace(m, channels=channels)
     assert isinstance(slid, Measurement)
-    fr = fit(slid, vehicle, options=FitOptions(starts=2))
+    fr = fit(slid, vehicle, options=FitOptions(starts=2, face_friction=True))
     assert fr.values["mu_face"] < 0.02
     assert fr.pulls()["mu_face"]["pull"] < -1.5  # the recording, not the prior, set it
     assert _barely_narrowed(fr, "mu_face") == "" and "mu_face" not in fr.at_bound  # a finding: none
+
+
+def test_the_face_friction_is_fitted_only_when_asked_for(world_motion):
+    from identify.identification import free_parameters
+
+    m, _, _ = world_motion
+    plain, held = free_parameters(m, None)
+    assert "mu_face" not in {p.name for p in plain} and "--face-friction" in held["mu_face"]
+    asked, held = free_parameters(m, None, face_friction=True)
+    assert "mu_face" in {p.name for p in asked} and "mu_face" not in held
+    # a recording without pitch or heave cannot show it, asked for or not
+    x_only = dataclasses.replace(m, channels={"x_m": m.channels["x_m"]}, sigma={"x_m": m.sigma["x_m"]})
+    free, held = free_parameters(x_only, None, face_friction=True)
+    assert "mu_face" not in {p.name for p in free} and "pitch or height" in held["mu_face"]

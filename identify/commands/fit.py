@@ -27,6 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--speed", type=float, default=None, help="impact speed in km/h if known (else measured)")
     p.add_argument("--out", type=Path, default=None, help="results folder (default: <video stem>.identify/ beside it)")
     p.add_argument("--no-discover", action="store_true", help="fit the base model only")
+    p.add_argument("--face-friction", action="store_true",
+                   help="fit the friction of the crushed front on the barrier face as well (README: measured"
+                        " gains and what discovery then does)")
     p.add_argument("--starts", type=int, default=5, help="starting points of the fit (default 5)")
     p.add_argument("--force", action="store_true",
                    help="fit even when the film contradicts the vehicle file (wheelbase, length); the result "
@@ -77,7 +80,7 @@ def _run(args: argparse.Namespace, folder) -> int:
         speed_kmh=args.speed,
         out=folder,
         discover=not args.no_discover,
-        options=dataclasses.replace(FitOptions(), starts=args.starts),
+        options=dataclasses.replace(FitOptions(), starts=args.starts, face_friction=args.face_friction),
         progress=progress,
         force=args.force,
     )

@@ -117,15 +117,17 @@ SPEED_SCALE = 10.0  # m/s; a fixed scale keeps the compiled fit the same for eve
 FACE_FRICTION_PRIOR = (0.3, 0.15)
 
 
-def base_parameters() -> tuple[FreeParameter, ...]:
-    """The four collision parameters of the paper, the barrier face's friction (``mu_face``,
-    with the prior ``FACE_FRICTION_PRIOR``) and the two nuisance parameters."""
+def base_parameters(face_friction: bool = False) -> tuple[FreeParameter, ...]:
+    """The four collision parameters of the paper, with ``face_friction`` the barrier face's
+    friction (``mu_face``, with the prior ``FACE_FRICTION_PRIOR``; ``FitOptions.face_friction``),
+    and the two nuisance parameters."""
+    face = (FreeParameter("mu_face", "1", "logit", lower=0.0, upper=1.0, floor_is_physical=True),)
     return (
         FreeParameter("k_compression", "N/m^3", "log", scale=1e6),
         FreeParameter("k_restitution", "N/m^3", "log", scale=1e6),
         FreeParameter("restitution", "1", "logit", lower=0.0, upper=1.0),
         FreeParameter("dz_contact", "m", "tanh", scale=0.6),
-        FreeParameter("mu_face", "1", "logit", lower=0.0, upper=1.0, floor_is_physical=True),
+        *(face if face_friction else ()),
         FreeParameter("impact_speed", "m/s", "log", scale=SPEED_SCALE),
         FreeParameter("contact_time", "s", "tanh", scale=CONTACT_TIME_RANGE),
     )

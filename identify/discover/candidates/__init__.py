@@ -73,7 +73,7 @@ def superset_template(params: Params) -> Params:
 def superset_spec(base_names) -> tuple:
     """The base parameters named in ``base_names`` (a base fit's ``names``, in the model's
     order) followed by every candidate's parameters: the compiled fit's parameter vector."""
-    base = tuple(p for p in base_parameters() if p.name in set(base_names))
+    base = tuple(p for p in base_parameters(face_friction=True) if p.name in set(base_names))
     return base + tuple(p for c in CANDIDATES for p in c.parameters)
 
 
