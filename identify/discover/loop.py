@@ -400,7 +400,9 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     """'' when the fitted candidate is a finding, else why not. Every candidate: no prior
     pulled beyond 3 sigma, no parameter at a bound or undetermined, a depth the crush reaches
     and the data fix; then its own evidence check over the window where it acts and its own
-    rules (``Candidate.evidence``, ``Candidate.implausible``)."""
+    rules (``Candidate.evidence``, ``Candidate.implausible``); and a candidate with an evidence
+    check must act somewhere in the recording (``Candidate.acting``: a rear axle candidate
+    whose model never lifts the rear lowered the misfit with its spring, not with a lift)."""
     crush_max = float(np.max(np.asarray(fr.trajectory.crush)))
     # the measured nuisances' pulls (speed, contact) are the final model's to report; here
     # the priors of what the model is made of (an engine's mass and gap)
@@ -424,7 +426,12 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
         why = candidate.evidence(fr, vehicle, window)[0]
         if why:
             return why
-    return candidate.implausible(fr, vehicle)
+    why = candidate.implausible(fr, vehicle)
+    if not why and candidate.evidence is not None and window is None:
+        # what lowered the misfit was then the candidate's parameters (a rear spring), not its physics
+        why = (f"its fitted model never shows it within the recording (no {effect.replace('_', ' ')} there):"
+               " whatever its parameters changed, it is not that mechanism")
+    return why
 
 
 def discover(
