@@ -158,7 +158,7 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     The default options are the candidate fits' (tolerance 1e-5, 40 steps a start) with
     five starts.
 
-    ``free``: the base parameters to fit (default: all seven; see
+    ``free``: the base parameters to fit (default: all six, seven with the face friction; see
     ``identify.fitting.model.base_parameters``). A recording that measures a second body (the
     engine's accelerometers) fits it as part of the base model
     (``identify.discover.candidates.measured_effects``), with its vehicle-file priors; the result
