@@ -43,6 +43,7 @@ from identify.fitting.least_squares import (
 )
 from identify.fitting.model import (
     FACE_FRICTION_PRIOR,
+    FACE_FRICTION_START,
     OFFSET_FREE,
     FreeParameter,
     assemble,
@@ -76,12 +77,6 @@ START_RANGES = {
     "restitution": (0.05, 0.4),
     "dz_contact": (-0.3, 0.1),
 }
-# Every start's face friction (1): a nose sliding on the face decides it, one that sticks
-# (above the few hundredths that hold it) barely does, so a fit started high on a sliding nose
-# finds no way down, while one started low climbs to sticking where the motion asks for it
-# and the prior (FACE_FRICTION_PRIOR) carries it on; V-SIM's 0 would start the logit where it
-# is flat.
-FACE_FRICTION_START = 0.01
 
 
 @dataclasses.dataclass(frozen=True)

@@ -115,6 +115,11 @@ SPEED_SCALE = 10.0  # m/s; a fixed scale keeps the compiled fit the same for eve
 # tells one value from another and this prior keeps the fit from wandering; a recording of a
 # car whose nose slides freely pulls it towards 0.
 FACE_FRICTION_PRIOR = (0.3, 0.15)
+# Every start's face friction (1): a nose sliding on the face decides it, one that sticks
+# barely does, so a fit started high on a sliding nose finds no way down, while one started
+# low climbs to sticking where the motion asks for it and the prior carries it on; V-SIM's 0
+# would start the logit where it is flat.
+FACE_FRICTION_START = 0.01
 
 
 def base_parameters(face_friction: bool = False) -> tuple[FreeParameter, ...]:
