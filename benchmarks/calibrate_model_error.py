@@ -58,8 +58,8 @@ def errors_of(row: dict) -> dict[str, tuple[float, float]]:
     """name -> (error, data std) of one world's row of ``accuracy.py --json``, in ``SCALE_OF``'
     terms (fractions of the truth, or the parameter's unit). Absent: parameters held fixed,
     and those the data alone leave not identified (``identified_by_the_data``: the model term
-    covers what the tool would claim). A row from before the model's error was added has only
-    ``std``: the data's."""
+    covers what the tool would claim), and the engine's unless the recording measured it. A row
+    from before the model's error was added has only ``std``: the data's."""
     out = {}
     for name, p in row.get("params", {}).items():
         std = p.get("std_data", p.get("std"))
@@ -75,7 +75,10 @@ def errors_of(row: dict) -> dict[str, tuple[float, float]]:
         out["impact_speed"] = (row["speed_err_pct"] / 100.0, speed_std / 100.0)
     if row.get("fit_contact_err_ms") is not None and row.get("contact_std_data_ms"):  # a film's, s
         out["contact_time"] = (row["fit_contact_err_ms"] / 1e3, row["contact_std_data_ms"] / 1e3)
-    for name, e in (row.get("engine") or {}).items():
+    # a measured engine's parameters (the base model's); an engine discovery named on a clean
+    # world is a false discovery, not the base model's error
+    engine = row.get("engine") if "engine_impact" in row.get("measured_effects", ()) else None
+    for name, e in (engine or {}).items():
         std = e.get("std_data", e.get("std"))
         if name in SCALE_OF and std and e.get("identified", True):
             scale = e["true"] if SCALE_OF[name] == "relative" else 1.0

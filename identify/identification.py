@@ -287,7 +287,7 @@ def write_results(out, ident: Identification, default_traj) -> Path:
             figures += plot_discovery(ident.discovery, tmp, vehicle)
         figures += forces
         (tmp / "predictions.csv").write_text(_predictions_csv(fr))
-        defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in COLLISION_PARAMETERS}
+        defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in (*COLLISION_PARAMETERS, "mu_face")}
         (tmp / "report.md").write_text(render_report(ident.document, defaults, figures))
     return out
 

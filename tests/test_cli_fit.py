@@ -39,7 +39,7 @@ def test_result_json_has_the_interface_fields(fitted_folder):
         p = doc["parameters"][name]
         assert p["unit"] == unit and p["std_data"] > 0 and p["std"] == pytest.approx(np.hypot(p["std_data"], p["std_model"]))
         # the data fix all four; the model's own error on recordings it did not make leaves
-        # k_restitution (70 % on films, identify/fitting/model_error.json) not identified
+        # k_restitution (77 % on films, identify/fitting/model_error.json) not identified
         assert p["identified"] is (name != "k_restitution"), (name, p.get("reason"))
     assert "model's own error" in doc["parameters"]["k_restitution"]["reason"]
     assert doc["fit"]["model"] == "base"  # how good the fit is, is measured on the reference world
@@ -76,6 +76,9 @@ def test_results_folder_holds_tracks_plots_and_report(fitted_folder):
     report = (fitted_folder / "report.md").read_text()
     k_fit = json.loads((fitted_folder / "result.json").read_text())["parameters"]["k_compression"]["value"]
     assert "V-SIM default" in report and "| 730 kN/m^3 |" in report and f"| {k_fit / 1e3:.4g} kN/m^3 |" in report
+    # the barrier face's friction has its row, held at V-SIM's 0 and saying why
+    face = next(line for line in report.splitlines() if line.startswith("| friction of the crushed front"))
+    assert "| 0 | 0 |" in face and "--face-friction" in face
     assert not list(fitted_folder.parent.glob(".crash.identify.*")), "no temporary folder left behind"
 
 
@@ -192,3 +195,14 @@ def test_rerun_into_its_results_folder_keeps_the_users_files(fitted_folder):
     assert stat.S_IMODE((fitted_folder / "result.json").stat().st_mode) == 0o664
     assert stat.S_IMODE((fitted_folder / "report.md").stat().st_mode) == 0o664
     assert not [p for p in fitted_folder.parent.iterdir() if p.name.startswith(".")]
+
+
+def test_the_report_gives_a_fitted_face_friction_its_value_and_std():
+    from identify.report.markdown import render_report
+
+    doc = {"vehicle_name": "car", "recording": "crash.mp4", "recording_kind": "film", "impact_speed_kmh": 56.0,
+           "fit": {"model": "base", "rms_m": 1e-4, "reduced_chi2": 1.0, "starts": 5, "starts_at_best": 5,
+                   "rms_by_channel": {"x_m": 1e-4}},
+           "parameters": {"mu_face": {"value": 0.31, "unit": "1", "std": 0.12, "std_data": 0.1, "identified": True}}}
+    face = [line for line in render_report(doc, {"mu_face": 0.0}, []).splitlines() if "barrier face" in line]
+    assert face == ["| friction of the crushed front on the barrier face | 0 | 0.31 | 0.12 | 0.1 |  |"]

@@ -86,7 +86,8 @@ def _row(seed, effect="clean", status="ok", not_identified=(), **params):
             "speed_err_pct": 0.2, "speed_std_pct": 0.5, "speed_std_data_pct": 0.1,
             "params": {name: {"value": v, "err": e, "std": 10 * s, "std_data": s, "identified": name not in not_identified}
                        for name, (v, e, s) in params.items()},
-            "engine": {"engine_impact.engine_mass": {"value": 150.0, "true": 200.0, "std": 9.0, "std_data": 4.0}}}
+            "engine": {"engine_impact.engine_mass": {"value": 150.0, "true": 200.0, "std": 9.0, "std_data": 4.0}},
+            "measured_effects": ["engine_impact"]}
 
 
 def test_calibration_rows_convert_to_fractions_of_the_truth_and_absolute_units():
@@ -99,8 +100,11 @@ def test_calibration_rows_convert_to_fractions_of_the_truth_and_absolute_units()
     assert out["impact_speed"] == pytest.approx((0.002, 0.001))
     assert out["engine_impact.engine_mass"] == pytest.approx((-0.25, 0.02))
     assert "contact_time" not in out  # a film's: the row of a film has the contact's error and std
-    film = errors_of({**_row(CALIBRATION_SEED_BASE), "fit_contact_err_ms": 4.0, "contact_std_data_ms": 0.5})
+    film = errors_of({**_row(CALIBRATION_SEED_BASE), "fit_contact_err_ms": 4.0, "contact_std_data_ms": 0.5,
+                      "measured_effects": []})
     assert film["contact_time"] == pytest.approx((0.004, 0.0005))
+    # an engine discovery on a film of a clean world is a false discovery, not the base model's error
+    assert "engine_impact.engine_mass" not in film
 
 
 def test_calibration_counts_identified_values_of_clean_fitted_calibration_worlds_only():

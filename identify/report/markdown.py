@@ -7,6 +7,7 @@ PARAMETER_ROWS = (
     ("k_restitution", "body stiffness, restitution phase", 1e-3, "kN/m^3"),
     ("restitution", "restitution coefficient", 1.0, ""),
     ("dz_contact", "lowering of the contact-force plane dz'", 1.0, "m"),
+    ("mu_face", "friction of the crushed front on the barrier face", 1.0, ""),
 )
 
 
