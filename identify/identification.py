@@ -19,6 +19,9 @@ from identify.recordings.load import Recording, load_recording
 from identify.report.results import ResultsFolder, default_output_folder as default_output_folder
 
 COLLISION_PARAMETERS = ("k_compression", "k_restitution", "restitution", "dz_contact")
+# result.json's "parameters" (and report.md's table): the collision parameters and the barrier
+# face's friction, fitted or held, so that --params rebuilds the fitted model
+RESULT_PARAMETERS = (*COLLISION_PARAMETERS, "mu_face")
 
 
 @dataclasses.dataclass
@@ -87,9 +90,6 @@ def free_parameters(measurement, speed_mps: float | None, face_friction: bool = 
     from identify.fitting.model import base_parameters
 
     free, held = base_parameters(face_friction), {}
-    if not face_friction:
-        held["mu_face"] = ("not fitted: V-SIM's model has no friction on the barrier face (0);"
-                           " 'identify fit --face-friction' fits it")
     if speed_mps is not None:
         free = tuple(p for p in free if p.name != "impact_speed")
     if not {"z_m", "pitch_rad"} & set(measurement.channels):
@@ -99,6 +99,9 @@ def free_parameters(measurement, speed_mps: float | None, face_friction: bool = 
                               " contact force shows only in the car's pitch and heave; held at V-SIM's 0 m")
         held["mu_face"] = ("not identified: the recording has no pitch or height channel, and the barrier face's"
                            " friction, a vertical force, shows only there; held at V-SIM's 0")
+    elif not face_friction:
+        held["mu_face"] = ("not fitted: V-SIM's model has no friction on the barrier face (0);"
+                           " 'identify fit --face-friction' fits it")
     return free, held
 
 
@@ -112,7 +115,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
     from sim import events_ms
 
     params = {}
-    for name in (*COLLISION_PARAMETERS, "mu_face"):  # the face's friction: so --params rebuilds the fitted model
+    for name in RESULT_PARAMETERS:
         if name not in fr.values:
             params[name] = {"value": float(getattr(fr.params, name)), "unit": _unit(name), "std": None,
                             "identified": False, "reason": (held or {}).get(name, "held fixed, not fitted")}  # fmt: skip
@@ -287,7 +290,7 @@ def write_results(out, ident: Identification, default_traj) -> Path:
             figures += plot_discovery(ident.discovery, tmp, vehicle)
         figures += forces
         (tmp / "predictions.csv").write_text(_predictions_csv(fr))
-        defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in (*COLLISION_PARAMETERS, "mu_face")}
+        defaults = {n: float(getattr(named_params("vsim_default"), n)) for n in RESULT_PARAMETERS}
         (tmp / "report.md").write_text(render_report(ident.document, defaults, figures))
     return out
 
