@@ -28,17 +28,19 @@ NOISE = {"x_m": 0.002, "z_m": 0.002, "pitch_rad": 0.0035, "front_wheel_angle_rad
 
 def synthetic_measurement(vehicle, params, speed=56.3 / 3.6, contact_time=0.0004, seed=0, t_ms=(-20, 300),
                           noise=NOISE, speed_sigma=0.08):
-    """A Measurement of a simulated crash: the model seen on a 1000 fps clock whose t = 0 is
-    ``contact_time`` (s) before the model's contact, with Gaussian noise of ``noise`` (channel
-    -> sigma in its unit) and a measured impact speed off by one sigma."""
+    """A Measurement of a simulated crash: the base model (``params`` with the engine on its
+    mounts the base model holds, unless ``params`` has an engine) seen on a 1000 fps clock
+    whose t = 0 is ``contact_time`` (s) before the model's contact, with Gaussian noise of
+    ``noise`` (channel -> sigma in its unit) and a measured impact speed off by one sigma."""
     import jax.numpy as jnp
 
+    from identify.discover.candidates import with_base_mechanisms
     from identify.recordings.measurement import Measurement
     from identify.fitting.model import predict
     from sim import simulate
 
     t = np.arange(t_ms[0], t_ms[1] + 1) * 1e-3
-    traj = simulate(params, vehicle, speed, duration=t_ms[1] / 1e3 + 0.02)
+    traj = simulate(with_base_mechanisms(params, vehicle), vehicle, speed, duration=t_ms[1] / 1e3 + 0.02)
     rng = np.random.default_rng(seed)
     channels, sigma = {}, {}
     for name, s in noise.items():

@@ -235,7 +235,7 @@ def test_discovered_mechanisms_and_vehicle_changes_are_rebuilt(tmp_path):
     """A result with a discovered rear-axle stiffness and a stiffness zone: the study's
     vehicle and parameters are the discovered model's, not the base one's."""
     from identify.commands.sensitivity import load_result
-    from sim import load_vehicle
+    from sim import load_params, load_vehicle
 
     folder = write_result(tmp_path / "r")
     doc = json.loads((folder / "result.json").read_text())
@@ -243,10 +243,16 @@ def test_discovered_mechanisms_and_vehicle_changes_are_rebuilt(tmp_path):
     doc["parameters"]["stiffness_zone.depth"] = {"value": 0.4, "unit": "m", "std": 0.01}
     doc["parameters"]["stiffness_zone.k_zone"] = {"value": 2.5e6, "unit": "N/m^3", "std": 1e5}
     doc["discoveries"].append({"effect": "rear_axle_lift", "window_ms": [38.0, 300.0], "parameters": {}})
+    # the base model's engine on its mounts, as 'identify fit' writes what it assumed
+    from identify.discover.candidates import assumed_in_base, superset_template
+
+    base = load_vehicle("audi_a4")
+    doc["fit"]["assumed"] = assumed_in_base(superset_template(load_params("paper_identified"), base), set())
     (folder / "result.json").write_text(json.dumps(doc))
     notes = []
     vehicle, params, speed, *_ = load_result(folder, None, notes)
-    base = load_vehicle("audi_a4")
+    engine = {m.effect: m for m in params.mechanisms}["engine_impact"]
+    assert float(engine.engine_mass) == 205.0 and float(engine.gap) == 10.0
     assert float(vehicle.axle_stiffness[1]) == 12345.0 and float(vehicle.axle_stiffness[0]) == float(base.axle_stiffness[0])
     zone = {m.effect: m for m in params.mechanisms}["stiffness_zone"]
     assert float(zone.depth) == 0.4 and float(zone.k_zone) == 2.5e6

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from helpers import NOISE, synthetic_measurement, with_heave_the_model_cannot_follow
+from identify.discover.candidates import NEVER_REACHED
 from identify.discover.loop import DiscoveryResult, discover, fit_base, plot_discovery
 from identify.fitting.collision_fit import FitOptions
 from sim import FrontWheelBlock, events_ms, named_params, simulate
@@ -71,7 +72,10 @@ def test_no_false_alarm_on_the_base_models_own_motion(a4):
     result = run_discovery(a4, m)
     assert result.discoveries == [], result.status
     assert result.status.startswith("no missing physics"), result.status
-    assert result.final.model == "base" and result.final.params.mechanisms == ()
+    # the base model's one mechanism: the engine on its mounts, never reaching the barrier
+    assert result.final.model == "base" and [m.effect for m in result.final.params.mechanisms] == ["engine_impact"]
+    engine = result.final.params.mechanisms[0]
+    assert float(engine.engine_mass) == float(a4.engine_mass) and float(engine.gap) == NEVER_REACHED
 
 
 def test_front_wheel_block_named_located_and_recovered(a4, block_case):
@@ -88,7 +92,7 @@ def test_front_wheel_block_named_located_and_recovered(a4, block_case):
     assert d["bic_after"] < d["bic_before"] - 10 and d["rms_after_m"] < d["rms_before_m"]
     assert result.final.rms_m == pytest.approx(NOISE["x_m"], rel=0.15)  # the noise level
     assert result.final.model == "base+front_wheel_block"
-    assert [mech.effect for mech in result.final.params.mechanisms] == ["front_wheel_block"]
+    assert [mech.effect for mech in result.final.params.mechanisms] == ["front_wheel_block", "engine_impact"]
     # the base parameters are quoted no closer than the two models agree (``with_model_choice``)
     fr = result.final
     assert {"k_compression", "restitution", "impact_speed"} <= set(fr.model_choice)

@@ -155,7 +155,7 @@ def test_a_candidate_with_a_lower_chi2_and_no_more_parameters_never_loses():
     assert trials[0].values == {"stiffness_zone.depth": 0.4, "stiffness_zone.k_zone": 2e6}
 
 
-def test_neutral_values_switch_every_candidate_off_with_its_own_or_the_vehicle_files_value(a4, neutral):
+def test_neutral_values_switch_every_candidate_off_and_keep_the_base_models_engine_out_of_reach(a4, neutral):
     from identify.discover.candidates import CANDIDATES
     from identify.discover.candidates.base import NEVER_REACHED
 
@@ -163,10 +163,40 @@ def test_neutral_values_switch_every_candidate_off_with_its_own_or_the_vehicle_f
     assert all(isinstance(v, float) for v in neutral.values())
     assert neutral["rate_dependence.rate_coefficient"] == 0.0
     assert neutral["progressive_stiffness.progression"] == 0.0
-    assert neutral["engine_impact.engine_mass"] == 0.0
+    # every car has an engine on its mounts: the vehicle file's (audi_a4.toml: 205 kg), never reaching the barrier
+    assert neutral["engine_impact.engine_mass"] == float(a4.engine_mass) == 205.0
+    assert neutral["engine_impact.gap"] == NEVER_REACHED
     assert neutral["stiffness_zone.depth"] == neutral["front_wheel_block.depth"] == NEVER_REACHED
     # the rear axle as the vehicle file has it (audi_a4.toml: rear suspension stiffness, per axle)
     assert neutral["rear_axle_lift.rear_axle_stiffness"] == float(np.asarray(a4.axle_stiffness)[1])
+
+
+def test_the_base_models_engine_is_added_once_kept_in_every_fit_and_said_to_be_assumed(a4):
+    """The base model holds the engine on its mounts (``Candidate.in_base``): simulated
+    motion of the base model gets it unless the params have an engine already; a fitted
+    model keeps it beside the accepted mechanisms and drops the switched-off ones; result.json
+    says it was assumed only while its parameters were not fitted."""
+    from identify.discover.candidates import (NEVER_REACHED, assumed_in_base, kept_mechanisms, superset_template,
+                                              with_base_mechanisms)
+    from sim import EngineImpact, FrontWheelBlock, make_params
+
+    plain = make_params(k_compression=7e5, k_restitution=7e5, restitution=0.2, dz_contact=0.0)
+    (engine,) = with_base_mechanisms(plain, a4).mechanisms
+    assert isinstance(engine, EngineImpact) and float(engine.engine_mass) == 205.0 and float(engine.gap) == NEVER_REACHED
+    assert float(engine.mount_break_force) == pytest.approx(25 * 9.81 * 205.0)
+    blocked = dataclasses.replace(plain, mechanisms=(FrontWheelBlock.at_tyre(a4),))
+    assert [m.effect for m in with_base_mechanisms(blocked, a4).mechanisms] == ["front_wheel_block", "engine_impact"]
+    own = dataclasses.replace(plain, mechanisms=(EngineImpact.defaults(150.0, 0.3),))
+    assert with_base_mechanisms(own, a4).mechanisms == own.mechanisms  # one second body at most
+
+    superset = superset_template(plain, a4)
+    assert len(superset.mechanisms) > 2
+    assert [m.effect for m in kept_mechanisms(superset, [])] == ["engine_impact"]
+    assert [m.effect for m in kept_mechanisms(superset, ["stiffness_zone"])] == ["stiffness_zone", "engine_impact"]
+    (assumed,) = assumed_in_base(superset, fitted=set())  # the switched-off candidates are no part of it
+    assert assumed["effect"] == "engine_impact" and assumed["parameters"]["engine_mass"] == {"value": 205.0, "unit": "kg"}
+    assert "never reaches the barrier" in assumed["explanation"]
+    assert assumed_in_base(superset, fitted={"engine_impact"}) == []
 
 
 # ---------------------------------------------------------------- named or unexplained: shape_check()
@@ -578,7 +608,7 @@ def test_each_candidates_parameters_are_its_mechanisms_fields_in_its_units_and_r
                     assert p.lower < v < p.upper, (p, v)
                 assert float(p.to_physical(p.to_unconstrained(v))) == pytest.approx(v, rel=1e-9, abs=1e-12), (p, v)
         for field, v in c.neutral.items():
-            if c.mechanism is not None and v != "vehicle":
+            if c.mechanism is not None and (callable(v) or v != "vehicle"):
                 assert field in c.mechanism.units or field in c.mechanism.__dataclass_fields__, (c.effect, field)
 
 

@@ -39,6 +39,10 @@ def test_sample_film_gives_the_parameters_it_was_made_with(sample_results):
         assert (sample_results / name).stat().st_size > 100, name
     # nothing is hidden in the sample film: discovery tries the candidates and accepts none
     assert doc["discoveries"] == [] and doc["fit"]["model"] == "base"
+    # the base model's engine on its mounts (the sample was made with it) is said to be assumed, with its mass
+    (assumed,) = doc["fit"]["assumed"]
+    assert assumed["effect"] == "engine_impact" and assumed["parameters"]["engine_mass"]["value"] == 205.0
+    assert "Assumed, not fitted (`engine_impact`)" in (sample_results / "report.md").read_text()
     assert not any(t["accepted"] for r in doc["discovery_rounds"] for t in r)
     assert doc["discovery_status"].startswith("no missing physics")
     # issue 16: the report counts the 5 starts of the fit (not the 1 of discovery's refit),

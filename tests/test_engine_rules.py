@@ -14,10 +14,10 @@ from identify.fitting.collision_fit import FitResult
 from identify.identification import _second_body_notes
 
 
-def fake_fit(values, std, priors, channels=("x_m", "vx_mps")):
+def fake_fit(values, std, priors, channels=("x_m", "vx_mps"), derived=()):
     fr = SimpleNamespace(values=values, std=std, priors=priors, units={}, PULL_CONFLICT=FitResult.PULL_CONFLICT, at_bound={},
                          trajectory=SimpleNamespace(crush=np.array([0.0, 0.5]), engine_force=np.array([0.0, 1e5])),
-                         measurement=SimpleNamespace(channels={c: None for c in channels}))
+                         measurement=SimpleNamespace(channels={c: None for c in channels}, derived=derived))
     fr.pulls = lambda: FitResult.pulls(fr)
     return fr
 
@@ -77,6 +77,8 @@ def test_a_sensor_recording_without_engine_channels_says_what_it_cannot_tell():
     with_engine = fake_fit({}, {}, {}, channels=("x_m", "vx_mps", "engine_x_m", "engine_vx_mps"))
     assert _second_body_notes(with_engine, sensors) == []
     assert measured_effects(with_engine.measurement) == ("engine_impact",)
+    shown = fake_fit({}, {}, {}, channels=("x_m", "vx_mps", "engine_vx_mps"), derived=("engine_vx_mps",))
+    assert measured_effects(shown.measurement) == ()  # shown, not fitted: the base model's engine is assumed
     assert _second_body_notes(without, SimpleNamespace(sensor_test=None)) == []  # a film says nothing of it
 
 
@@ -188,8 +190,10 @@ def test_what_the_crash_cannot_show_is_marked_on_the_final_fit_whatever_it_was_b
 
     values = {"engine_impact.engine_mass": 180.0, "engine_impact.gap": 1.15, "engine_impact.k_engine": 3e6,
               "engine_impact.k_rear": 1e6, "engine_impact.stop_forward": 0.05}
-    fields = dict(names=tuple(values), values=values, params=make_params(k_compression=7e5, k_restitution=7e5,
-                  restitution=0.2, dz_contact=0.0), model="x",
+    from identify.discover.candidates import superset_template
+
+    fields = dict(names=tuple(values), values=values, params=superset_template(make_params(
+                  k_compression=7e5, k_restitution=7e5, restitution=0.2, dz_contact=0.0), a4), model="x",
                   identified={"engine_impact.k_engine": (False, "not identified (std 90 %): barely changes")},
                   trajectory=SimpleNamespace(engine_force=np.zeros(2), engine_x=np.array([0.0, 0.6])))
     fr = FitResult(**{f.name: fields.get(f.name) for f in dataclasses.fields(FitResult) if f.init})

@@ -307,14 +307,14 @@ def test_nhtsa_test_is_fitted_from_motion_and_checked_against_the_load_cells(tmp
     # does, with the peak's height within issue 15's 8 %, and its curve is closer to the load
     # cells' (ISO 18571) than the one-body model's and than a rigid car moving as measured
     base, rigid = check["base_model"], check["rigid_body"]
-    assert base["label"] == "one-body base model"
+    assert base["label"] == "base model on the cabin alone"
     assert abs(check["peak_time_predicted_ms"] - check["peak_time_measured_ms"]) <= 5.0
     assert abs(base["peak_time_predicted_ms"] - check["peak_time_measured_ms"]) > 5.0
     assert abs(check["peak_error"]) < 0.08
     assert check["iso18571"]["overall"] > max(base["iso18571"]["overall"], rigid["iso18571"]["overall"])
     assert check["nrmse"] < base["nrmse"]
     report = (out / "report.md").read_text()
-    assert "one-body base model" in report and "a rigid car moving exactly as measured" in report
+    assert "base model on the cabin alone" in report and "a rigid car moving exactly as measured" in report
     assert "two bodies" in report
     # the floor under any two-body model fitting the motion: the vehicle file's engine mass,
     # scored where the fitted model is, and the least-squares mass no other mass beats

@@ -5,14 +5,12 @@ barrier, accelerometers with noise and offsets, a speed trap), fitted as a user 
 The rule it guards is the brief's first: no number said with confidence that the truth
 contradicts. Every collision parameter the result calls identified lies within 3 of its
 reported standard deviations of the world's truth, and the measured impact speed within 3
-of its own. Without a forward stop for the engine, and fitted only from a gap the crush
-reaches, the engine fitted as a second body hit the barrier in these worlds and pulled
-k_compression 25-33 % low (z -2 to -4); where the model and the one-body fit disagree the
-result must say that k_compression depends on the model. An engine that never reaches the
-barrier leaves its gap not identified, known only to exceed its travel, which the world's
-truth must bear out. And discovery, run as the command
-line runs it, names nothing on this clean world. Seed 300 (tests use seeds below
-1000; the accuracy benchmark scores on seeds from 910,000)."""
+of its own. Fitted as a second body, this world's measured engine does not explain the
+cabin's motion better than the base model's engine assumed on typical mounts, and it put
+k_compression 17 % low: the result must say so and quote the number no closer than the two
+models agree (3.4 of its own standard deviations off without that). And discovery, run as
+the command line runs it, names nothing on this clean world. Seed 300 (tests use seeds
+below 1000; the accuracy benchmark scores on seeds from 910,000)."""
 
 from __future__ import annotations
 
@@ -63,22 +61,28 @@ def test_discovery_names_no_physics_the_world_does_not_have(clean_world_fit):
 
 
 @pytest.mark.slow
-def test_the_cabin_alone_fit_the_result_offers_agrees_with_the_truth(clean_world_fit):
-    # the alternative a disputed parameter's reason gives: the one-body model fitted to the
-    # cabin's channels alone
+def test_the_cabin_alone_fit_follows_the_cabin_and_widens_what_the_two_body_fit_says(clean_world_fit):
+    # the base model on the cabin's channels alone, its engine assumed on typical mounts and
+    # the measured one shown, follows the cabin's x to 0.8 mm RMS here (0.7 and 1.4 mm on
+    # development worlds 960700-960701), where a rigid car's best fit misses by 5.1 mm (6.2
+    # and 8.2); fitted as a second body, the measured engine came out at 445 kg (prior
+    # 174 +- 52), the cabin's x missed by 8.7 mm and k_compression 17 % low: the cabin does
+    # not bear it out, and the two-body fit's numbers are quoted no closer than the two agree
     ident, truth = clean_world_fit
-    one = ident.one_body
-    assert one is not None and "engine_vx_mps" not in one.predictions
+    one, fr, doc = ident.one_body, ident.fit, ident.document
+    assert one is not None and "engine_vx_mps" in one.measurement.derived
+    assert [m.effect for m in one.params.mechanisms] == ["engine_impact"] and one.rms["x_m"] < 2.5e-3
     checked = [n for n in COLLISION_PARAMETERS if n in one.values and one.identified.get(n, (True, ""))[0]]
     assert "k_compression" in checked
     for name in checked:
         assert abs(one.values[name] - truth["params"][name]) < Z_MAX * one.std[name], name
+    assert any("does not explain the cabin's motion better" in w for w in doc["warnings"])
+    shift = abs(fr.values["k_compression"] - one.values["k_compression"])
+    assert fr.model_choice["k_compression"] == pytest.approx(shift) and fr.std["k_compression"] > shift
 
 
 @pytest.mark.slow
 def test_the_gap_of_an_engine_that_never_reaches_the_barrier_is_not_identified(clean_world_fit):
-    import re
-
     ident, truth = clean_world_fit
     gap = ident.document["parameters"]["engine_impact.gap"]
     assert not gap["identified"], gap
@@ -86,10 +90,3 @@ def test_the_gap_of_an_engine_that_never_reaches_the_barrier_is_not_identified(c
     # each channel's misfit, the engine's channel freed its parameters to absorb the cabin's
     # misfit, and the second body came out "borne out" with this gap identified
     assert ident.fit.sigma_widened == {} and ident.document["fit"]["sigma_widened_by_channel"] == {}
-    # on this world the fit still has the engine hit the barrier (a gap of 0.27 m, truth 0.67 m),
-    # which the cabin's motion does not bear out: a lower bound would have to come from a miss
-    found = re.search(r"exceed the ([0-9.]+) m it travelled", gap["reason"])
-    if found:
-        assert float(found.group(1)) < truth["hidden"]["engine_gap"]
-    else:
-        assert "does not bear out the engine as a second body" in gap["reason"], gap

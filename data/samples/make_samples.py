@@ -3,7 +3,8 @@
     python data/samples/make_samples.py
 
 ``a4_paper.mp4``: Audi A4 (data/vehicles/audi_a4.toml) into a rigid barrier at 56.3 km/h,
-simulated with the ``paper_identified`` parameters (``sim``), 30 frames of approach at
+simulated with the ``paper_identified`` parameters and the base model's engine on its mounts
+(``identify.recordings.synthetic.simulate_and_render``), 30 frames of approach at
 constant speed before first contact and 300 ms after it, 1000 fps, 1280x512 px at about
 4.6 mm/px in the car plane, mild noise (1.5 grey levels), motion blur (0.3 of the frame
 interval, 3 sub-frames), a fixed target on the barrier. Truth beside it: ``a4_paper.truth.json`` (contact frame, impact

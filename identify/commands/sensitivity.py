@@ -119,48 +119,6 @@ def parse_times(text, duration_ms: float) -> tuple:
     return tuple(sorted(set(v / 1000.0 for v in values)))
 
 
-def _mechanisms_from_result(doc, notes):
-    """Rebuild the mechanisms of a result.json that ``sim.MECHANISMS`` knows: from the fitted
-    ``"parameters"`` named ``effect.field`` (as ``identify fit`` writes them), else from each
-    discovery's own ``"parameters"`` (``field`` or ``field_<unit>``)."""
-    import jax.numpy as jnp
-
-    from sim import MECHANISMS
-
-    fields: dict[str, dict] = {}
-    for key, entry in (doc.get("parameters") or {}).items():
-        effect, dot, field = key.partition(".")
-        value = entry.get("value") if isinstance(entry, dict) else entry
-        if dot and effect in MECHANISMS and isinstance(value, (int, float)) and not isinstance(value, bool):
-            fields.setdefault(effect, {})[field] = jnp.asarray(float(value))
-    from identify.fitting.model import VEHICLE_OVERRIDES
-
-    vehicle_effects = {name.split(".", 1)[0] for name in VEHICLE_OVERRIDES}  # applied to the vehicle instead
-    for disc in doc.get("discoveries") or []:
-        effect = disc.get("effect") if isinstance(disc, dict) else disc
-        if effect in vehicle_effects:
-            continue
-        if effect not in MECHANISMS:
-            notes.append(f"discovered effect {effect!r} has no simulation mechanism: left out of the study")
-            continue
-        if effect in fields:
-            continue
-        units = MECHANISMS[effect].units
-        for name, entry in (disc.get("parameters") or {}).items():
-            value = entry.get("value") if isinstance(entry, dict) else entry
-            field = name.split(".")[-1]
-            field = field if field in units else field.rsplit("_", 1)[0]
-            if field in units and isinstance(value, (int, float)) and not isinstance(value, bool):
-                fields.setdefault(effect, {})[field] = jnp.asarray(float(value))
-    out = []
-    for effect, values in fields.items():
-        try:
-            out.append(MECHANISMS[effect](**values))
-        except (TypeError, ValueError) as err:
-            notes.append(f"effect {effect!r} left out: its parameters {sorted(values)} do not build the mechanism ({err})")
-    return tuple(out)
-
-
 def _vehicle_overrides(table) -> dict:
     """The fitted values of discovered vehicle changes (``rear_axle_lift.rear_axle_stiffness``)
     in a result.json's ``"parameters"``."""
@@ -184,6 +142,7 @@ def load_result(result_dir: Path, speed_kmh, notes):
     import numpy as np
 
     from identify.sensitivity import INPUTS, Uncertainty
+    from identify.report.results import mechanisms_from_result
     from sim import load_vehicle, make_params
     from sim.errors import ConfigError
     from sim.params import UNITS
@@ -229,7 +188,7 @@ def load_result(result_dir: Path, speed_kmh, notes):
         vehicle = vehicle_with(vehicle, overrides)
         notes.append("vehicle changed as discovered: " + ", ".join(f"{k} = {v:.6g}" for k, v in overrides.items()))
     try:
-        params = make_params(mechanisms=_mechanisms_from_result(doc, notes), **values)
+        params = make_params(mechanisms=mechanisms_from_result(doc, notes), **values)
     except ConfigError as err:
         raise UserError(f"{path}: {err}") from None
 

@@ -45,8 +45,8 @@ import numpy as np
 from identify.discover.candidates import (
     BY_EFFECT,
     CANDIDATES,
-    accepted_mechanisms,
     held_for,
+    kept_mechanisms,
     measured_effects,
     priors_for,
     starting_guesses,
@@ -153,16 +153,17 @@ class DiscoveryResult:
 def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.replace(CANDIDATE_FIT, starts=5),
              speed_mps=None, progress=None) -> FitResult:
     """The base model's fit (as ``identify.fitting.collision_fit.fit``) run through discovery's superset
-    model with every candidate mechanism switched off: the same answer, and
-    :func:`discover` then reuses its compiled solve instead of compiling its own (~20 s).
+    model with every candidate at its neutral state: the engine on its mounts, out of the
+    barrier's reach (``Candidate.in_base``), the other mechanisms off. :func:`discover` then
+    reuses its compiled solve instead of compiling its own (~20 s).
     The default options are the candidate fits' (tolerance 1e-5, 40 steps a start) with
     five starts.
 
     ``free``: the base parameters to fit (default: all six, seven with the face friction; see
     ``identify.fitting.model.base_parameters``). A recording that measures a second body (the
     engine's accelerometers) fits it as part of the base model
-    (``identify.discover.candidates.measured_effects``), with its vehicle-file priors; the result
-    holds that mechanism and no other."""
+    (``identify.discover.candidates.measured_effects``), with its vehicle-file priors. The
+    result's Params hold the base model's mechanisms (the engine: fitted when measured)."""
     from identify.fitting.model import base_parameters
     from sim import make_params
 
@@ -171,7 +172,7 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
         names.remove("impact_speed")
     template = make_params(k_compression=730e3, k_restitution=730e3, restitution=0.2, dz_contact=0.0)
     measured = measured_effects(measurement)
-    kwargs = dict(template=superset_template(template), free=superset_spec(names), speed_mps=speed_mps,
+    kwargs = dict(template=superset_template(template, vehicle), free=superset_spec(names), speed_mps=speed_mps,
                   held=held_for(measured, vehicle), priors=priors_for(measured, vehicle))
     # every starting guess of the measured body (an engine's: at its typical gap, and out of
     # the barrier's reach): a fit from one stays in its valley (on reference worlds whose
@@ -458,7 +459,7 @@ def discover(
     say = progress or (lambda s: None)
     speed_mps = None if "impact_speed" in base.names else base.speed
     spec = superset_spec(base.names)
-    template = superset_template(base.params)
+    template = superset_template(base.params, vehicle)
     fopts = dataclasses.replace(options.fit, misfit_weights=False)
 
     measured = measured_effects(measurement)
@@ -575,10 +576,11 @@ def discover(
 
 
 def _final(fr: FitResult, accepted) -> FitResult:
-    """The fit with only the accepted mechanisms in its Params (the superset's switched-off
-    ones dropped: the trajectory is the same), and their parameters the recorded crash
-    cannot show (``Candidate.unseen``) marked not identified."""
-    params = dataclasses.replace(fr.params, mechanisms=accepted_mechanisms(fr.values, accepted))
+    """The fit with only the accepted mechanisms and the base model's in its Params (the
+    superset's switched-off ones dropped: the trajectory is the same), and the accepted
+    ones' parameters the recorded crash cannot show (``Candidate.unseen``) marked not
+    identified."""
+    params = dataclasses.replace(fr.params, mechanisms=kept_mechanisms(fr.params, accepted))
     out = dataclasses.replace(fr, params=params, model="+".join(("base", *accepted)), identified=dict(fr.identified))
     for effect in accepted:
         for name, why in BY_EFFECT[effect].unseen(out).items():
@@ -587,7 +589,7 @@ def _final(fr: FitResult, accepted) -> FitResult:
     return out
 
 
-def with_model_choice(fr: FitResult, base: FitResult, added) -> FitResult:
+def with_model_choice(fr: FitResult, base: FitResult, added, choice: str | None = None) -> FitResult:
     """``fr`` (the model with the mechanisms ``added`` by discovery) with each parameter it
     shares with ``base`` (the base model's fit to the same recording, weighted alike) widened
     by how far those mechanisms moved it: |fr - base| joins the model's own error in
@@ -601,7 +603,10 @@ def with_model_choice(fr: FitResult, base: FitResult, added) -> FitResult:
     stiffness: +277 %, quoted at 5 sigma). Both models fit the recording; the spread between
     their answers is the part of the model's error that the choice between them brings
     (Draper 1995, "Assessment and propagation of model uncertainty": the between-model
-    variance), so the reported number is quoted no closer than the two models agree."""
+    variance), so the reported number is quoted no closer than the two models agree. The same
+    holds for a measured engine fitted as a second body that the cabin's motion does not bear
+    out against the base model on the cabin alone (``identify.identification``; ``choice``
+    then names it in the reason)."""
     from identify.fitting.collision_fit import NOT_IDENTIFIED, spread_of
 
     shift = {n: abs(fr.values[n] - base.values[n]) for n in fr.names if n in base.values}
@@ -614,6 +619,8 @@ def with_model_choice(fr: FitResult, base: FitResult, added) -> FitResult:
     out = dataclasses.replace(fr, std=std, std_model=std_model, covariance=cov, model_choice=shift,
                               identified=dict(fr.identified))
     mechanisms = ", ".join(e.replace("_", " ") for e in added)
+    whose = "discovery's" if choice is None else "the model's"
+    choice = choice or f"the mechanism discovery added ({mechanisms})"
     for name, (kind, limit) in NOT_IDENTIFIED.items():
         if name not in shift or not out.identified.get(name, (True, ""))[0]:
             continue
@@ -621,9 +628,9 @@ def with_model_choice(fr: FitResult, base: FitResult, added) -> FitResult:
         if spread > limit:
             size = f"{100 * spread:.0f} %" if kind == "relative" else f"{spread:.3g}"
             out.mark_not_identified(name, (
-                f"not identified (std {size}): the mechanism discovery added ({mechanisms}) moved it from"
+                f"not identified (std {size}): {choice} moved it from"
                 f" {base.values[name]:.4g} to {fr.values[name]:.4g} {fr.units[name]}; both models fit the"
-                " recording, and the choice between them is discovery's, not a measurement"))
+                f" recording, and the choice between them is {whose}, not a measurement"))
     return out
 
 

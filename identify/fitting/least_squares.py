@@ -60,7 +60,7 @@ def integrated_autocorrelation_time(residual: np.ndarray, max_lag: int = 50) -> 
     return max(1.0, 1.0 + 2.0 * total)
 
 
-def channel_variance_factors(r, channel_rows: dict, n_params: int) -> tuple[dict, dict]:
+def channel_variance_factors(r, channel_rows: dict, n_params: int, tau_at_least: dict | None = None) -> tuple[dict, dict]:
     """Per channel, how much larger than its stated noise the residuals' variance is.
 
     r : (m,) weighted residual rows (model - measured) / sigma; channel_rows : channel ->
@@ -71,7 +71,9 @@ def channel_variance_factors(r, channel_rows: dict, n_params: int) -> tuple[dict
     out in proportion to the rows). Their product is the factor by which the channel's
     variance is widened: its rows weigh as n_c / tau_c independent samples of noise as large
     as its misfit. A channel the model misses by far more than the tracker's noise (the heave
-    and pitch of a car the model simplifies) then no longer lends its misfit to the others."""
+    and pitch of a car the model simplifies) then no longer lends its misfit to the others.
+    ``tau_at_least``: group -> another group whose tau is a floor for its own (a short
+    group's estimate is biased low: 20 samples of noise correlated over 19 gave 1.8)."""
     r = np.asarray(r, dtype=float)
     n_data = sum(len(rows) for rows in channel_rows.values())
     share = max(n_data - n_params, 1) / max(n_data, 1)
@@ -80,6 +82,9 @@ def channel_variance_factors(r, channel_rows: dict, n_params: int) -> tuple[dict
         z = r[rows]
         tau[name] = integrated_autocorrelation_time(z)
         misfit[name] = max(1.0, float(z @ z) / max(len(rows) * share, 1e-300)) if len(rows) else 1.0
+    for name, other in (tau_at_least or {}).items():
+        if name in tau and other in tau:
+            tau[name] = max(tau[name], tau[other])
     return tau, misfit
 
 
@@ -107,7 +112,7 @@ class Uncertainty:
 
 
 def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res: int,
-                         per_channel: bool = True) -> Uncertainty:
+                         per_channel: bool = True, tau_at_least: dict | None = None) -> Uncertainty:
     """Covariance of the fitted parameters at a least-squares optimum.
 
     r : (m,) residual rows at the optimum, weighted by the recording's own sigmas; jac_u :
@@ -119,7 +124,8 @@ def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res
     that carry information (valid samples and priors); per_channel : False widens the whole
     covariance by one factor instead, max(1, chi2/dof), the priors' rows included (what the
     fit did before per-channel misfits: wider where one channel misses far beyond its noise,
-    which discovery's rules were set against, ``identify.discover.loop.CANDIDATE_FIT``).
+    which discovery's rules were set against, ``identify.discover.loop.CANDIDATE_FIT``);
+    tau_at_least : as :func:`channel_variance_factors`'s.
 
     Gauss-Newton: cov = (J^T J)^-1 with J the Jacobian in physical units (J_u divided by
     dvalue/du, the chain rule), each channel's rows divided by sqrt(tau_c misfit_c)
@@ -133,7 +139,7 @@ def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res
     r, jac_u, dvalue_du, typical = (np.asarray(a, dtype=float) for a in (r, jac_u, dvalue_du, typical))
     chi2 = float(r @ r)
     dof = max(int(n_res) - len(typical), 1)
-    tau, misfit = channel_variance_factors(r, channel_rows, len(typical))
+    tau, misfit = channel_variance_factors(r, channel_rows, len(typical), tau_at_least)
     scale = 1.0
     if not per_channel:
         scale = max(1.0, chi2 / dof)

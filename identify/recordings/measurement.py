@@ -67,9 +67,11 @@ class Measurement:
     source : what the recording was (a file name), for reports.
     events_ms : events seen in the recording (e.g. ``front_wheel_block``), ms after contact.
     notes : things a person should read about the recording.
-    derived : channels computed from another channel of the same recording (a velocity
-        differentiated from ``x_m``, a displacement integrated from ``vx_mps``): shown in
-        plots but not fitted, as their errors are not independent of their source's.
+    derived : channels shown in plots but not fitted: computed from another channel of the
+        same recording (a velocity differentiated from ``x_m``, a displacement integrated
+        from ``vx_mps``), as their errors are not independent of their source's; or left out
+        of the fit for a stated reason (a measured engine the cabin's motion does not bear
+        out as a second body, ``identify.identification``).
     """
 
     t: np.ndarray

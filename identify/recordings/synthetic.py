@@ -302,7 +302,9 @@ def render_crash(vehicle, trajectory, out_path: str | Path, *, frames_before: in
 
 def simulate_and_render(vehicle: str = "audi_a4", params: str = "paper_identified", speed_kmh: float = 56.3,
                         out_path: str | Path = "crash.mp4", duration: float = 0.3, **render_kwargs) -> dict:
-    """Simulate a crash with ``sim`` and render it (:func:`render_crash`).
+    """Simulate a crash with the base model (``sim`` with ``params`` and the engine on its
+    mounts that ``identify fit``'s base model holds, ``identify.discover.candidates.with_base_mechanisms``)
+    and render it (:func:`render_crash`).
 
     Parameters
     ----------
@@ -332,10 +334,11 @@ def simulate_and_render(vehicle: str = "audi_a4", params: str = "paper_identifie
     import jax
 
     jax.config.update("jax_enable_x64", True)
+    from identify.discover.candidates import with_base_mechanisms
     from sim import events_ms, load_params, load_vehicle, simulate
 
     veh = load_vehicle(vehicle)
-    p = load_params(params)
+    p = with_base_mechanisms(load_params(params), veh)
     v0 = speed_kmh / 3.6
     traj = simulate(p, veh, speed=v0, duration=duration)
     arrays = {name: np.asarray(getattr(traj, name)) for name in TRAJECTORY_FIELDS + ("front_margin", "rear_margin")}

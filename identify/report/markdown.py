@@ -29,14 +29,15 @@ def misfit_weights_sentence(widened: dict) -> str:
 
 def model_choice_sentence(parameters: dict) -> str:
     """' ... moved ...' for the parameters whose ``model_choice_shift`` (result.json; how far
-    the mechanisms discovery added moved them from the base model's fit) counts in their
-    std, '' when there is none."""
+    the choice of model moved them: ``identify.discover.loop.with_model_choice``) counts in
+    their std, '' when there is none."""
     moved = {n: p["model_choice_shift"] for n, p in parameters.items() if p.get("model_choice_shift")}
     if not moved:
         return ""
     parts = ", ".join(f"{n} by {v:.3g} {parameters[n].get('unit', '')}".rstrip() for n, v in moved.items())
-    return (f" It also holds how far the mechanisms discovery added moved each parameter from the base"
-            f" model's fit ({parts}): the choice of model is discovery's, not a measurement.")
+    return (f" It also holds how far the choice of model moved each parameter ({parts}): the mechanisms discovery"
+            f" added, against the base model's fit, or a measured engine the cabin's motion does not bear out,"
+            f" against the base model on the cabin alone; that choice is no measurement.")
 
 
 def prior_lines(priors: dict) -> list[str]:
@@ -53,6 +54,16 @@ def prior_lines(priors: dict) -> list[str]:
         flag = " **conflict: model and recording disagree**" if p["conflict"] else ""
         out.append(f"{label}: {source} {p['prior'] * scale:.4g} +- {p['prior_std'] * scale:.2g}{u}, fitted"
                    f" {p['value'] * scale:.4g} +- {p['std'] * scale:.2g}{u} (pull {p['pull']:+.1f} sigma){flag}")
+    return out
+
+
+def assumed_lines(assumed: list[dict]) -> list[str]:
+    """One line per part of the base model assumed, not fitted (``result.json``'s
+    ``fit.assumed``: the engine on its mounts), with its values."""
+    out = []
+    for a in assumed:
+        values = ", ".join(f"{n} {_fmt(p['value'], 1.0, 3)} {p['unit']}" for n, p in a["parameters"].items())
+        out.append(f"Assumed, not fitted (`{a['effect']}`): {a['explanation']} ({values})")
     return out
 
 
@@ -87,6 +98,7 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         f" {doc['impact_speed_kmh']:.2f} km/h, model `{fitinfo['model']}`.",
         f"Fit: RMS {1e3 * fitinfo['rms_m']:.2f} mm in x, reduced chi-square {fitinfo['reduced_chi2']:.2f}"
         f" ({starts}).{misfit_weights_sentence(fitinfo.get('sigma_widened_by_channel') or {})}",
+        *assumed_lines(fitinfo.get("assumed") or []),
         "",
         "## Parameters (the paper's Table 1, side by side)",
         "",
@@ -186,7 +198,8 @@ def _force_check_lines(check: dict, doc: dict) -> list[str]:
                      " does not identify: its peak error says little")
     two_body = "engine_impact" in model
     if "rigid_body" in check and not two_body:
-        lines.append("- a one-body model's force is its mass times its own deceleration, so a model that fits the"
+        lines.append("- a model whose engine never reaches the barrier gives a force close to its mass times its"
+                     " cabin's deceleration (the engine rides on its mounts), so a model that fits the"
                      " motion better moves its force towards the rigid car's row: what separates that row from the"
                      " load cells is the car's own deformation (its engine and cabin stop at different times),"
                      " not the force law")

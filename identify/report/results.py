@@ -356,3 +356,51 @@ class ResultsFolder:
             _unregister(tmp)
             self.tmp = None
         return self.out
+
+
+def mechanisms_from_result(doc: dict, notes: list[str]) -> tuple:
+    """Rebuild the mechanisms of a result.json (``doc``) that ``sim.MECHANISMS`` knows: from the fitted
+    ``"parameters"`` named ``effect.field`` (as ``identify fit`` writes them), else from each
+    discovery's own ``"parameters"`` (``field`` or ``field_<unit>``); and the base model's
+    parts the fit assumed (``"fit"``'s ``"assumed"``: the engine on its mounts). What cannot
+    be rebuilt is left out, with a line in ``notes``."""
+    import jax.numpy as jnp
+
+    from sim import MECHANISMS
+
+    fields: dict[str, dict] = {}
+    for part in ((doc.get("fit") or {}).get("assumed") or []) if isinstance(doc.get("fit"), dict) else []:
+        if isinstance(part, dict) and part.get("effect") in MECHANISMS:
+            fields[part["effect"]] = {n: jnp.asarray(float(e["value"])) for n, e in (part.get("parameters") or {}).items()
+                                      if isinstance(e, dict) and isinstance(e.get("value"), (int, float))}
+    for key, entry in (doc.get("parameters") or {}).items():
+        effect, dot, field = key.partition(".")
+        value = entry.get("value") if isinstance(entry, dict) else entry
+        if dot and effect in MECHANISMS and isinstance(value, (int, float)) and not isinstance(value, bool):
+            fields.setdefault(effect, {})[field] = jnp.asarray(float(value))
+    from identify.fitting.model import VEHICLE_OVERRIDES
+
+    vehicle_effects = {name.split(".", 1)[0] for name in VEHICLE_OVERRIDES}  # applied to the vehicle instead
+    for disc in doc.get("discoveries") or []:
+        effect = disc.get("effect") if isinstance(disc, dict) else disc
+        if effect in vehicle_effects:
+            continue
+        if effect not in MECHANISMS:
+            notes.append(f"discovered effect {effect!r} has no simulation mechanism: left out of the study")
+            continue
+        if effect in fields:
+            continue
+        units = MECHANISMS[effect].units
+        for name, entry in (disc.get("parameters") or {}).items():
+            value = entry.get("value") if isinstance(entry, dict) else entry
+            field = name.split(".")[-1]
+            field = field if field in units else field.rsplit("_", 1)[0]
+            if field in units and isinstance(value, (int, float)) and not isinstance(value, bool):
+                fields.setdefault(effect, {})[field] = jnp.asarray(float(value))
+    out = []
+    for effect, values in fields.items():
+        try:
+            out.append(MECHANISMS[effect](**values))
+        except (TypeError, ValueError) as err:
+            notes.append(f"effect {effect!r} left out: its parameters {sorted(values)} do not build the mechanism ({err})")
+    return tuple(out)

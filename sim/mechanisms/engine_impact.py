@@ -82,6 +82,8 @@ class EngineImpact(Mechanism):
 
     DAMPING_RATIO = 0.3
     STOP_STIFFNESS = 3.0e6  # N/m, a hard contact, as the engine block's default k_engine
+    TYPICAL_MOUNT_STIFFNESS = 8.0e5  # N/m, all mounts together along x
+    TYPICAL_MOUNT_BREAK_G = 25.0  # the mounts let go at this deceleration of the engine (g)
     RESTITUTION_REAR = 0.1
 
     @classmethod
@@ -90,7 +92,8 @@ class EngineImpact(Mechanism):
         k_engine 3 MN/m, k_rear 1 MN/m, e_e 0.1, k_m 0.8 MN/m, mounts letting go at 25 g on
         the engine, forward stop 0.05 m ahead (as far as ``stop_back`` behind)."""
         values = dict(engine_mass=engine_mass, gap=gap, k_engine=3.0e6, k_rear=1.0e6, restitution_engine=0.1,
-                      mount_stiffness=8.0e5, mount_break_force=25.0 * 9.81 * jnp.asarray(engine_mass, dtype=float),
+                      mount_stiffness=cls.TYPICAL_MOUNT_STIFFNESS,
+                      mount_break_force=cls.TYPICAL_MOUNT_BREAK_G * 9.81 * jnp.asarray(engine_mass, dtype=float),
                       stop_forward=0.05)
         values.update(overrides)
         return cls(**{k: jnp.asarray(v, dtype=float) for k, v in values.items()})

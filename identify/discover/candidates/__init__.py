@@ -8,7 +8,8 @@ order discovery tries them. Adding one is a new module and a line here.
 
 The superset template carries every candidate's mechanism at its neutral value (a blocking
 or zone depth of 10 m is never reached; a progression or rate coefficient of 0 changes
-nothing), so fits that free different candidates differ only in which parameters are held
+nothing; the engine rides on its mounts and never reaches the barrier, which is part of the
+base model: ``Candidate.in_base``), so fits that free different candidates differ only in which parameters are held
 (data, not code): one compile serves them all (``identify.fitting.collision_fit.fit(..., held=...)``).
 """
 
@@ -36,15 +37,17 @@ REGISTRY = (
 CANDIDATES: tuple[Candidate, ...] = tuple(importlib.import_module(f"{__name__}.{m}").CANDIDATE for m in REGISTRY)
 BY_EFFECT = {c.effect: c for c in CANDIDATES}
 
-__all__ = ["BY_EFFECT", "CANDIDATES", "NEVER_REACHED", "Candidate", "accepted_mechanisms", "held_for",
+__all__ = ["BY_EFFECT", "CANDIDATES", "assumed_in_base", "NEVER_REACHED", "Candidate", "base_mechanisms", "held_for", "kept_mechanisms",
            "measured_effects", "neutral_values", "priors_for", "starting_guesses", "superset_spec",
-           "superset_template"]
+           "superset_template", "with_base_mechanisms"]
 
 
 def measured_effects(measurement) -> tuple[str, ...]:
     """Candidates the recording measures directly, so they belong to the base model rather
-    than to discovery: ``engine_impact`` when the engine's own motion was recorded."""
-    return ("engine_impact",) if {"engine_x_m", "engine_vx_mps"} & set(measurement.channels) else ()
+    than to discovery: ``engine_impact`` when the engine's own motion was recorded and is
+    fitted (not only shown: ``Measurement.derived``)."""
+    fitted = set(measurement.channels) - set(measurement.derived)
+    return ("engine_impact",) if {"engine_x_m", "engine_vx_mps"} & fitted else ()
 
 
 def priors_for(active, vehicle) -> dict[str, tuple[float, float]]:
@@ -57,13 +60,47 @@ def priors_for(active, vehicle) -> dict[str, tuple[float, float]]:
     return out
 
 
-def superset_template(params: Params) -> Params:
-    """``params`` with every candidate's mechanism appended at its neutral value (and any
-    mechanism it already had dropped: the candidates cover them)."""
-    mechanisms = tuple(
-        c.mechanism(**{f: jnp.asarray(float(v), dtype=jnp.float64) for f, v in c.neutral.items()})
-        for c in CANDIDATES if c.mechanism is not None
-    )
+def _neutral(c: Candidate, field: str, vehicle) -> float:
+    """Candidate ``c``'s neutral value of ``field`` for ``vehicle`` (``Candidate.neutral``)."""
+    v = c.neutral[field]
+    if callable(v):
+        return float(v(vehicle))
+    return vehicle_value(vehicle, f"{c.effect}.{field}") if v == "vehicle" else float(v)
+
+
+def _neutral_mechanism(c: Candidate, vehicle):
+    return c.mechanism(**{f: jnp.asarray(_neutral(c, f, vehicle), dtype=jnp.float64) for f in c.neutral})
+
+
+def base_mechanisms(vehicle) -> tuple:
+    """The mechanisms every fitted model holds at their neutral state (``Candidate.in_base``:
+    the engine on its mounts, out of the barrier's reach), for ``vehicle``."""
+    return tuple(_neutral_mechanism(c, vehicle) for c in CANDIDATES if c.in_base)
+
+
+def with_base_mechanisms(params: Params, vehicle) -> Params:
+    """``params`` with the base model's mechanisms (:func:`base_mechanisms`) it lacks added:
+    the motion the base model gives those collision parameters (at most one second body:
+    an engine already there stays as it is)."""
+    effects = {m.effect for m in params.mechanisms}
+    body = any(m.has_body for m in params.mechanisms)
+    extra = tuple(m for m in base_mechanisms(vehicle) if m.effect not in effects and not (m.has_body and body))
+    return dataclasses.replace(params, mechanisms=params.mechanisms + extra)
+
+
+def assumed_in_base(params: Params, fitted) -> list[dict]:
+    """The base model's mechanisms in ``params`` that the fit did not fit (their effect not
+    among ``fitted``): result.json's ``fit.assumed``, each with its effect, the sentence that
+    says what it is (``Candidate.in_base``) and its parameters ({name: {value, unit}})."""
+    return [{"effect": m.effect, "explanation": BY_EFFECT[m.effect].in_base,
+             "parameters": {n: {"value": v, "unit": u} for n, (v, u) in m.parameter_values().items()}}
+            for m in params.mechanisms if BY_EFFECT[m.effect].in_base and m.effect not in set(fitted)]
+
+
+def superset_template(params: Params, vehicle) -> Params:
+    """``params`` with every candidate's mechanism appended at its neutral value for
+    ``vehicle`` (and any mechanism it already had dropped: the candidates cover them)."""
+    mechanisms = tuple(_neutral_mechanism(c, vehicle) for c in CANDIDATES if c.mechanism is not None)
     # plain float64 leaves (a fit's Params may hold weakly typed ones, which would make the
     # compiled fit's signature differ and recompile it)
     params = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=jnp.float64), params)
@@ -78,17 +115,13 @@ def superset_spec(base_names) -> tuple:
 
 
 def neutral_values(vehicle) -> dict[str, float]:
-    """``effect.field`` -> the value that switches the mechanism off, for every candidate."""
-    out = {}
-    for c in CANDIDATES:
-        for name in c.names:
-            v = c.neutral[name.split(".", 1)[1]]
-            out[name] = vehicle_value(vehicle, name) if v == "vehicle" else float(v)
-    return out
+    """``effect.field`` -> its value when discovery has not added the candidate (off, or for
+    a candidate ``in_base`` out of the barrier's way), for every candidate's free parameter."""
+    return {name: _neutral(c, name.split(".", 1)[1], vehicle) for c in CANDIDATES for name in c.names}
 
 
 def held_for(active, vehicle) -> dict[str, float]:
-    """The held values when the candidates named in ``active`` are fitted: all others off."""
+    """The held values when the candidates named in ``active`` are fitted: all others neutral."""
     active = set(active)
     return {k: v for k, v in neutral_values(vehicle).items() if k.split(".", 1)[0] not in active}
 
@@ -103,15 +136,9 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None, measured=
              for field, value in start.items()} for start in starts]
 
 
-def accepted_mechanisms(values: dict[str, float], effects) -> tuple:
-    """The sim mechanisms of the accepted ``effects`` with their fitted ``values`` (effects
-    that change the vehicle have none)."""
-    out = []
-    for effect in effects:
-        c = BY_EFFECT[effect]
-        if c.mechanism is None:
-            continue
-        fields = {f: jnp.asarray(float(v)) for f, v in c.neutral.items()}
-        fields.update({name.split(".", 1)[1]: jnp.asarray(float(values[name])) for name in c.names})
-        out.append(c.mechanism(**fields))
-    return tuple(out)
+def kept_mechanisms(params: Params, accepted) -> tuple:
+    """The mechanisms of a superset model's ``params`` that its fitted model holds: those of
+    the ``accepted`` effects and those in the base model (``Candidate.in_base``), with the
+    values the fit gave them; the others are switched off and dropped (the trajectory is
+    the same)."""
+    return tuple(m for m in params.mechanisms if m.effect in set(accepted) or BY_EFFECT[m.effect].in_base)

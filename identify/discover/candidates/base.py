@@ -97,8 +97,10 @@ class Candidate:
     mechanism : the sim mechanism class, or None for a candidate that changes the vehicle
         (``identify.fitting.model.VEHICLE_OVERRIDES``).
     parameters : its fitted fields, as FreeParameter named ``effect.field``.
-    neutral : field -> value that switches the mechanism off (physical units), or
-        ``"vehicle"``: the vehicle file's own value.
+    neutral : field -> the value it has when discovery has not added it (physical units): one
+        that switches it off, or, for a candidate ``in_base``, one that keeps it out of the
+        barrier's way; ``"vehicle"``: the vehicle file's own value; a callable(vehicle) ->
+        value: a value that depends on the vehicle (an engine's typical mass).
     starts : starting guesses, each field -> a value or a rule ``(fit, vehicle, analysis) ->
         value`` (``fit`` the current model's FitResult, or None before any fit; ``analysis``
         its ``identify.fitting.residuals.ResidualAnalysis``, or None).
@@ -119,6 +121,11 @@ class Candidate:
         gap but that it is larger), reported not identified with the reason.
     measured_starts : further starting guesses (as ``starts``) when the recording measures
         this body itself and it is fitted as part of the base model.
+    in_base : '' for a candidate whose neutral state is its absence; else its neutral state is
+        part of the base model (the engine on its mounts, out of the barrier's reach: every
+        car has one), every fitted model keeps it, and this is the sentence that says so in
+        reports; discovery's candidate is then what the neutral state leaves out (the engine
+        reaching the barrier).
     """
 
     effect: str
@@ -134,6 +141,7 @@ class Candidate:
     implausible: Callable = _no_rule
     unseen: Callable = _nothing_unseen
     measured_starts: tuple[dict[str, float | Callable], ...] = ()
+    in_base: str = ""
 
     @property
     def names(self) -> tuple[str, ...]:
