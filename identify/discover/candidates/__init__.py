@@ -9,8 +9,9 @@ order discovery tries them. Adding one is a new module and a line here.
 The superset template carries every candidate's mechanism at its neutral value (a blocking
 or zone depth of 10 m is never reached; a progression or rate coefficient of 0 changes
 nothing; the engine rides on its mounts and never reaches the barrier, which is part of the
-base model: ``Candidate.in_base``), so fits that free different candidates differ only in which parameters are held
-(data, not code): one compile serves them all (``identify.fitting.collision_fit.fit(..., held=...)``).
+base model: ``Candidate.in_base``), so fits that free different candidates differ only in
+which parameters are held (data, not code): one compile serves them all
+(``identify.fitting.collision_fit.fit(..., held=...)``).
 """
 
 from __future__ import annotations
@@ -37,8 +38,8 @@ REGISTRY = (
 CANDIDATES: tuple[Candidate, ...] = tuple(importlib.import_module(f"{__name__}.{m}").CANDIDATE for m in REGISTRY)
 BY_EFFECT = {c.effect: c for c in CANDIDATES}
 
-__all__ = ["BY_EFFECT", "CANDIDATES", "assumed_in_base", "NEVER_REACHED", "Candidate", "base_mechanisms", "held_for", "kept_mechanisms",
-           "measured_effects", "neutral_values", "priors_for", "starting_guesses", "superset_spec",
+__all__ = ["BY_EFFECT", "CANDIDATES", "NEVER_REACHED", "Candidate", "assumed_in_base", "base_mechanisms", "held_for",
+           "kept_mechanisms", "measured_effects", "neutral_values", "priors_for", "starting_guesses", "superset_spec",
            "superset_template", "with_base_mechanisms"]
 
 
