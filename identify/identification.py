@@ -259,9 +259,9 @@ def write_results(out, ident: Identification, default_traj) -> Path:
                 base, base_label = (ident.one_body.trajectory, ident.one_body.contact_time), "base model on the cabin alone"
             elif start is not None and fr.model != start.model:
                 base = (start.trajectory, start.contact_time)
-            from identify.discover.candidates.engine_impact import ENGINE_MASS_FRACTION, engine_typical
+            from identify.discover.candidates.engine_impact import ENGINE_MASS_FRACTION, typical_engine_mass
 
-            engine_mass = (engine_typical(vehicle)["engine_impact.engine_mass"],
+            engine_mass = (typical_engine_mass(vehicle),
                            "the vehicle file's" if vehicle.engine_mass is not None
                            else f"{100 * ENGINE_MASS_FRACTION:.0f} % of the vehicle's mass, typical")
             ident.document["force_check"] = force_check_document(
@@ -400,7 +400,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
 
     rec = dataclasses.replace(rec, measurement=without_spinning_wheels(rec.measurement, float(veh.wheel_radius)))
     free, held = free_parameters(rec.measurement, speed_mps, options.face_friction)
-    from identify.discover.loop import CANDIDATE_FIT, discover as discover_missing, fit_base
+    from identify.discover.loop import CANDIDATE_FIT, discover as discover_missing, fit_base, with_model_choice
 
     # discovery's base fit is run as its candidates are (one compile); without discovery it is the reported fit
     base_options = (dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver)
@@ -418,8 +418,6 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
     one_body = _cabin_alone(rec, veh, free, base_options, speed_mps, say)
     engine_doubt, disputed = second_body_doubts(fr, one_body)
     if engine_doubt:  # the cabin prefers the base model's engine: the choice between the two is no measurement
-        from identify.discover.loop import with_model_choice
-
         fr = with_model_choice(fr, one_body, ["engine_impact"], choice=(
             "the engine fitted as a second body, which the cabin's motion does not bear out,"))
     for name, reason in disputed.items():  # the data do not decide between the two models there
@@ -545,7 +543,8 @@ def _cabin_alone(rec, veh, free, options, speed_mps, say):
     m = rec.measurement
     if not measured_effects(m) or rec.sensor_test is None or not rec.sensor_test.barrier:
         return None
-    cabin = dataclasses.replace(m, derived=tuple(dict.fromkeys((*m.derived, *(c for c in m.channels if c.startswith("engine_"))))))
+    engine = [c for c in m.channels if c.startswith("engine_") and c not in m.derived]
+    cabin = dataclasses.replace(m, derived=(*m.derived, *engine))
     say("fitting the base model to the cabin alone (for the load-cell comparison)")
     return fit_base(cabin, veh, free=free, options=dataclasses.replace(options, misfit_weights=False),
                     speed_mps=speed_mps, progress=say)

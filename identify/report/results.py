@@ -369,7 +369,8 @@ def mechanisms_from_result(doc: dict, notes: list[str]) -> tuple:
     from sim import MECHANISMS
 
     fields: dict[str, dict] = {}
-    for part in ((doc.get("fit") or {}).get("assumed") or []) if isinstance(doc.get("fit"), dict) else []:
+    fit = doc.get("fit") if isinstance(doc.get("fit"), dict) else {}
+    for part in fit.get("assumed") or []:
         if isinstance(part, dict) and part.get("effect") in MECHANISMS:
             fields[part["effect"]] = {n: jnp.asarray(float(e["value"])) for n, e in (part.get("parameters") or {}).items()
                                       if isinstance(e, dict) and isinstance(e.get("value"), (int, float))}

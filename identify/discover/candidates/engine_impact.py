@@ -33,6 +33,12 @@ def typical_engine_mass(vehicle) -> float:
     return float(vehicle.engine_mass if vehicle.engine_mass is not None else ENGINE_MASS_FRACTION * float(vehicle.mass))
 
 
+def on_its_mounts(vehicle) -> EngineImpact:
+    """The base model's engine: of :func:`typical_engine_mass`, on ``EngineImpact.defaults``'
+    typical mounts, its gap out of the barrier's reach."""
+    return EngineImpact.defaults(typical_engine_mass(vehicle), NEVER_REACHED)
+
+
 def engine_typical(vehicle) -> dict[str, float]:
     """Where the engine fit starts: the vehicle file's engine mass and gap, else 13 % of the
     mass and 0.35 m."""
@@ -88,11 +94,8 @@ CANDIDATE = Candidate(
      parameter("engine_impact", "k_engine", "N/m", "log", scale=1e6),
      parameter("engine_impact", "k_rear", "N/m", "log", scale=1e6),
      parameter("engine_impact", "stop_forward", "m", "logit", lower=0.01, upper=0.6)),
-    # the base model's engine: on typical mounts, never reaching the barrier
-    {"engine_mass": typical_engine_mass, "gap": NEVER_REACHED, "k_engine": 3e6, "k_rear": 1e6,
-     "restitution_engine": 0.1, "mount_stiffness": EngineImpact.TYPICAL_MOUNT_STIFFNESS,
-     "mount_break_force": lambda vehicle: EngineImpact.TYPICAL_MOUNT_BREAK_G * 9.81 * typical_engine_mass(vehicle),
-     "stop_forward": 0.05},
+    # the base model's engine: EngineImpact.defaults' typical mounts and block, never reaching the barrier
+    {field: (lambda vehicle, field=field: float(getattr(on_its_mounts(vehicle), field))) for field in EngineImpact.units},
     (TYPICAL_START,),
     {"engine_mass": "engine_mass_kg", "gap": "gap_m", "k_engine": "k_engine_N_per_m",
      "k_rear": "k_rear_N_per_m", "stop_forward": "stop_forward_m"},
