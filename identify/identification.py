@@ -426,6 +426,8 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
                           vehicle_ref=vehicle_reference(vehicle))
     if found is not None:  # every candidate tried, round by round, and why it was not accepted
         doc["discovery_rounds"] = [[trial.as_dict() for trial in r] for r in found.rounds]
+        # the models not adopted that the recording does not rule out: they widen the stds
+        doc["discovery_alternatives"] = [dataclasses.asdict(a) for a in found.alternatives]
         # the multi-start search is the base model's; discovery refines from its best fit
         doc["fit"]["starts"], doc["fit"]["starts_at_best"] = base.starts, base.starts_at_best
         doc["fit"]["starts_of"] = "base model"

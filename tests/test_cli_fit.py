@@ -208,3 +208,24 @@ def test_the_report_gives_a_fitted_face_friction_its_value_and_std():
            "parameters": {"mu_face": {"value": 0.31, "unit": "1", "std": 0.12, "std_data": 0.1, "identified": True}}}
     face = [line for line in render_report(doc, {"mu_face": 0.0}, []).splitlines() if "barrier face" in line]
     assert face == ["| friction of the crushed front on the barrier face | 0 | 0.31 | 0.12 | 0.1 |  |"]
+
+
+def test_simulate_from_a_result_json_brings_the_fitted_model_along(fitted_folder, tmp_path, capsys):
+    """``identify simulate --params result.json`` simulates the model the fit had (the base
+    model's engine on its mounts), not a rigid car with the same four numbers."""
+    doc = json.loads((fitted_folder / "result.json").read_text())
+    assert [part["effect"] for part in doc["fit"]["assumed"]] == ["engine_impact"]
+    rigid = tmp_path / "rigid.json"  # the same collision parameters without the result's model
+    rigid.write_text(json.dumps({n: doc["parameters"][n]["value"] for n in
+                                 ("k_compression", "k_restitution", "restitution", "dz_contact")}))
+    runs = {}
+    for name, params in (("fitted", fitted_folder / "result.json"), ("rigid", rigid)):
+        out = tmp_path / f"{name}.csv"
+        assert main(["simulate", "--vehicle", "audi_a4", "--params", str(params), "--duration-ms", "120",
+                     "--out", str(out)]) == 0
+        runs[name] = np.genfromtxt(out, delimiter=",", names=True)
+        runs[name + " says"] = capsys.readouterr().err
+    assert "simulated with engine impact as the fit had them" in runs["fitted says"]
+    assert "engine" not in runs["rigid says"]
+    # the engine lags the cabin at first: the cabin's displacement differs from the rigid car's by millimetres
+    assert np.max(np.abs(runs["fitted"]["x_m"] - runs["rigid"]["x_m"])) > 1e-3

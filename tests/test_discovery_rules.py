@@ -8,7 +8,8 @@ rule inverted or removed fails a test here:
   against directly measured channels (each candidate's ``evidence``, ``identify.discover.candidates``);
 - the held-out prediction check (``_held_out_chi2``);
 - a model discovery changed quoted no closer than it agrees with the base model
-  (:func:`with_model_choice`).
+  (:func:`with_model_choice`), nor closer than the models it did not adopt and the
+  recording does not rule out agree with it (:func:`alternatives`, :func:`alternatives_shift`).
 
 Accuracy of discovery on data it did not make is measured on the reference world
 (``tests/test_discovery.py`` and ``benchmarks/accuracy.py``)."""
@@ -20,8 +21,9 @@ import types
 import numpy as np
 import pytest
 
-from identify.discover.candidates import neutral_values
-from identify.discover.loop import (Trial, _held_out_chi2, _plausible, bic, choose, round_tau, score, shape_check,
+from identify.discover.candidates import BY_EFFECT, neutral_values
+from identify.discover.loop import (Alternative, Trial, _alternatives_reason, _held_out_chi2, _plausible,
+                                   alternatives_shift, bic, choose, round_tau, score, shape_check, widened_by_choice,
                                    with_model_choice)
 from identify.discover.candidates.front_wheel_block import front_wheels_blocked
 from identify.fitting.collision_fit import FitResult
@@ -107,6 +109,7 @@ class FakeFit:
     at_bound: dict = dataclasses.field(default_factory=dict)
     units: dict = dataclasses.field(default_factory=dict)
     chi2: float = 0.0
+    std_data: dict = dataclasses.field(default_factory=dict)
     PULL_CONFLICT = FitResult.PULL_CONFLICT
     pulls = FitResult.pulls
 
@@ -273,6 +276,7 @@ def changed(effect, **over):
     ("rate_dependence", {"rate_coefficient": (0.0, 0.0)}, "0 or below"),  # exactly 0, however certain
     ("rate_dependence", {"rate_coefficient": (0.006, 0.004)}, "does not differ from 0"),
     ("rear_axle_lift", {"rear_axle_stiffness": (110e3, 10e3)}, "does not differ from the vehicle file"),
+    ("engine_impact", {"gap": (0.61, 0.32)}, "where it meets the barrier is not determined (gap std 0.320 m)"),
 ])
 def test_an_implausible_fit_is_refused_with_its_reason(a4, neutral, effect, over, words):
     values, std = changed(effect, **over)
@@ -600,7 +604,7 @@ def test_each_candidates_parameters_are_its_mechanisms_fields_in_its_units_and_r
             else:
                 assert p.unit == c.mechanism.units[field], p
             assert p.transform in ("log", "logit", "tanh", "linear"), p
-            fit = types.SimpleNamespace(trajectory=types.SimpleNamespace(crush=np.array([0.0, 0.6])),
+            fit = types.SimpleNamespace(trajectory=types.SimpleNamespace(crush=np.array([0.0, 0.6]), engine_x=np.array([0.0, 0.6])),
                                         params=types.SimpleNamespace(k_compression=1e6), values={})
             for start in (*c.starts, *c.measured_starts):
                 v = start[field](fit, a4, None) if callable(start[field]) else start[field]
@@ -685,3 +689,74 @@ def test_a_parameter_discovery_barely_moved_stays_identified():
     out = with_model_choice(final, base, ["front_wheel_block"])
     assert out.identified["k_compression"] == (True, "")
     assert out.std["k_compression"] == pytest.approx(math.hypot(3e4, 1.27e5, 3e4))
+
+
+# ---------------------------------------------------------------- models discovery did not adopt: alternatives
+
+def test_a_model_that_fits_better_but_was_not_adopted_widens_the_quoted_parameter():
+    current = fitted({"k_compression": 1.5e6, "restitution": 0.20}, {"k_compression": 5e4, "restitution": 0.002},
+                     {"k_compression": 1.9e5, "restitution": 0.01})
+    # an unexplained force (BIC 80 lower) whose refit puts k_compression 0.6e6 lower, a
+    # candidate that fits better still but barely moves it, and one 12 BIC worse that moves it the other way
+    best = Alternative("rear axle lift", -1000.0, {"k_compression": 1.46e6, "restitution": 0.199})
+    better = Alternative("an unexplained force", -80.0, {"k_compression": 0.9e6, "restitution": 0.201})
+    worse = Alternative("stiffness zone", +12.0, {"k_compression": 2.5e6, "restitution": 0.20})
+    shift = alternatives_shift(current, [best, better, worse])
+    # every model that fits better counts in full, not only the best of them
+    assert shift["k_compression"] == pytest.approx(0.6e6)
+    assert shift["restitution"] == pytest.approx(0.001)
+    # a model 12 BIC worse counts by exp(-3)
+    assert alternatives_shift(current, [worse])["k_compression"] == pytest.approx(1.0e6 * math.exp(-3.0))
+    assert alternatives_shift(current, []) == {}
+    # the reason names the models that moved it farthest first, whatever their BIC
+    why = _alternatives_reason("k_compression", current, [best, better, worse], shift["k_compression"])
+    assert "(an unexplained force 9e+05 (BIC -80), stiffness zone 2.5e+06 (BIC +12), rear axle lift" in why
+    out = widened_by_choice(current, shift, lambda name: f"{name} moved")
+    assert out.std["k_compression"] == pytest.approx(math.hypot(5e4, 1.9e5, 0.6e6))
+    assert out.identified["k_compression"] == (False, "not identified (std 42 %): k_compression moved")
+    assert out.identified["restitution"] == (True, "")
+    assert out.model_choice["k_compression"] == pytest.approx(0.6e6)
+    # a second widening adds in quadrature to the first
+    again = widened_by_choice(out, {"k_compression": 0.8e6}, lambda name: "again")
+    assert again.model_choice["k_compression"] == pytest.approx(1.0e6)
+    # as the alternatives widen it: the std becomes at least the shift, the model's own error
+    # (calibrated on clean worlds) covering what the shift does not exceed
+    least = widened_by_choice(current, shift, lambda name: "moved", at_least=True)
+    assert least.std["k_compression"] == pytest.approx(0.6e6)
+    assert least.std["k_compression"] == pytest.approx(math.hypot(5e4, least.std_model["k_compression"]))
+    assert np.sqrt(np.diag(least.covariance)) == pytest.approx([least.std[n] for n in least.names])
+    small = widened_by_choice(current, {"k_compression": 1.5e5}, lambda name: "moved", at_least=True)
+    assert small.std["k_compression"] == pytest.approx(current.std["k_compression"])
+    assert small.identified["k_compression"] == (True, "")
+
+
+def test_only_models_the_recording_does_not_rule_out_are_alternatives(monkeypatch):
+    import identify.discover.loop as loop
+
+    current = fitted({"k_compression": 1.5e6}, {"k_compression": 5e4}, {"k_compression": 1.9e5})
+    fits = {e: fitted({"k_compression": k, **{n: 1.0 for n in BY_EFFECT[e].names}},
+                      {"k_compression": 5e4, **{n: 0.1 for n in BY_EFFECT[e].names}}, {})
+            for e, k in (("stiffness_zone", 2.0e6), ("rate_dependence", 1.0e6), ("engine_impact", 1.2e6),
+                         ("front_wheel_block", 1.4e6))}
+    fits["engine_impact"].at_bound = {"engine_impact.gap": "at its upper bound"}
+    fits["stiffness_zone"].at_bound = {"contact_time": "at its upper bound"}  # the current model's bound too
+    monkeypatch.setitem(loop.BY_EFFECT, "front_wheel_block", dataclasses.replace(
+        BY_EFFECT["front_wheel_block"], evidence=lambda fr, vehicle, window: ("the wheels turn there", "")))
+    monkeypatch.setattr(loop, "effect_window_ms", lambda fr, effect: (10.0, 50.0))
+    trials = [Trial("stiffness_zone", 0.0, -30.0, None, {}, False, "its depth is not determined"),
+              Trial("rate_dependence", 0.0, -3.0, None, {}, False, "BIC change -3.0 is not below -10", settled=False),
+              Trial("engine_impact", 0.0, -50.0, None, {}, False, "at its bound"),
+              Trial("front_wheel_block", 0.0, -60.0, None, {}, False, "the recording shows the wheels turning")]
+    alts = loop.alternatives([trials], fits, current, None, vehicle=None)
+    # not settled, at a bound, refuted by its evidence: out; a depth the data do not fix: in
+    assert [(a.label, a.delta_bic, a.values) for a in alts] == [("stiffness zone", -30.0, {"k_compression": 2.0e6})]
+    # a round that accepted a candidate scored the others against another model: none of them
+    accepted = [dataclasses.replace(trials[0], accepted=True)]
+    assert loop.alternatives([accepted], fits, current, None, vehicle=None) == []
+    missing = types.SimpleNamespace(parameter_shift={"k_compression": -4e5}, bic_before=500.0, bic_after=420.0)
+    alts = loop.alternatives([accepted], fits, current, missing, vehicle=None)
+    assert [(a.label, a.delta_bic, a.values) for a in alts] == [("an unexplained force", -80.0,
+                                                                  {"k_compression": pytest.approx(1.1e6)})]
+    # the missing force's linearised refit far from the fit (a stiffness below zero) is no model
+    missing.parameter_shift = {"k_compression": -1.6e6}
+    assert loop.alternatives([accepted], fits, current, missing, vehicle=None) == []

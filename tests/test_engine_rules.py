@@ -218,3 +218,16 @@ def test_only_a_measured_engine_is_also_started_out_of_the_barriers_reach(a4):
     assert [g["engine_impact.gap"] for g in both] == [0.35, GAP_OUT_OF_REACH_M]
     assert {k: v for k, v in both[1].items() if k != "engine_impact.gap"} == {
         k: v for k, v in both[0].items() if k != "engine_impact.gap"}
+
+
+def test_discovery_also_starts_the_engine_where_the_current_fit_just_reaches_the_barrier(a4):
+    """A start next to the current model (the engine touching the barrier 1 cm before the
+    farthest it came) besides the typical gap: from the typical gap alone the engine's fit
+    ended worse than the model without it on 2 of 4 development worlds."""
+    from identify.discover.candidates import BY_EFFECT, starting_guesses
+
+    engine = BY_EFFECT["engine_impact"]
+    fr = SimpleNamespace(trajectory=SimpleNamespace(engine_x=np.array([0.0, 0.3, 0.52, 0.5])))
+    assert [g["engine_impact.gap"] for g in starting_guesses(engine, fr, a4)] == [0.35, pytest.approx(0.51)]
+    fr.trajectory.engine_x = np.array([0.0, 1.4])  # never beyond the range's top
+    assert [g["engine_impact.gap"] for g in starting_guesses(engine, fr, a4)] == [0.35, 1.15]

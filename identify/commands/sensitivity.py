@@ -119,22 +119,6 @@ def parse_times(text, duration_ms: float) -> tuple:
     return tuple(sorted(set(v / 1000.0 for v in values)))
 
 
-def _vehicle_overrides(table) -> dict:
-    """The fitted values of discovered vehicle changes (``rear_axle_lift.rear_axle_stiffness``)
-    in a result.json's ``"parameters"``."""
-    import jax.numpy as jnp
-
-    from identify.fitting.model import VEHICLE_OVERRIDES
-
-    out = {}
-    for name in VEHICLE_OVERRIDES:
-        entry = table.get(name)
-        value = entry.get("value") if isinstance(entry, dict) else entry
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
-            out[name] = jnp.asarray(float(value))
-    return out
-
-
 def load_result(result_dir: Path, speed_kmh, notes):
     """(vehicle, params, speed m/s, Uncertainty of the normal part) from ``result.json``."""
     import json
@@ -142,7 +126,7 @@ def load_result(result_dir: Path, speed_kmh, notes):
     import numpy as np
 
     from identify.sensitivity import INPUTS, Uncertainty
-    from identify.report.results import mechanisms_from_result
+    from identify.report.results import mechanisms_from_result, vehicle_from_result
     from sim import load_vehicle, make_params
     from sim.errors import ConfigError
     from sim.params import UNITS
@@ -181,12 +165,7 @@ def load_result(result_dir: Path, speed_kmh, notes):
                 stds[name] = float(std)
             else:  # a parameter of the fitted model that is no input here (the barrier face's friction)
                 notes.append(f"{name} is not an input of the sensitivity study: held at its fitted value")
-    overrides = _vehicle_overrides(table)
-    if overrides:
-        from identify.fitting.model import vehicle_with
-
-        vehicle = vehicle_with(vehicle, overrides)
-        notes.append("vehicle changed as discovered: " + ", ".join(f"{k} = {v:.6g}" for k, v in overrides.items()))
+    vehicle = vehicle_from_result(doc, vehicle, notes)
     try:
         params = make_params(mechanisms=mechanisms_from_result(doc, notes), **values)
     except ConfigError as err:

@@ -19,8 +19,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--vehicle", required=True, help="vehicle name (see 'identify vehicles') or path to a .toml")
     p.add_argument(
-        "--params", required=True, help="named set (vsim_default, paper_identified) or a JSON file"
-    )
+        "--params", required=True,
+        help="named set (vsim_default, paper_identified) or a JSON file; an 'identify fit' result.json brings its "
+        "model along (the engine it assumed, the mechanisms and vehicle changes it discovered)")
     p.add_argument("--speed", type=float, default=None, help="impact speed in km/h (default 56.3, the paper's)")
     p.add_argument("--duration-ms", type=float, default=300.0, help="simulated time after contact (default 300)")
     p.add_argument(
@@ -64,6 +65,47 @@ def check_simulate_out(out: Path, force: bool) -> None:
                             "choose another name, or --force to replace it")
 
 
+def simulated_model(name_or_path: str, vehicle):
+    """(Params, vehicle, notes) to simulate: a named set or parameter file (``sim.load_params``),
+    or a result.json of ``identify fit`` (it has a ``"fit"``) with the model it fitted: its
+    collision parameters, the base model's engine it assumed and the mechanisms it discovered
+    (``identify.report.results.mechanisms_from_result``), and the vehicle changed as discovered;
+    ``notes`` says what was rebuilt or left out."""
+    import json
+
+    from identify.report.results import mechanisms_from_result, vehicle_from_result
+    from sim import load_params, make_params
+    from sim.params import UNITS
+
+    path = Path(name_or_path)
+    doc = None
+    if path.suffix == ".json" and path.is_file():
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+            doc = None  # load_params says what is wrong with it
+    if not (isinstance(doc, dict) and isinstance(doc.get("fit"), dict) and isinstance(doc.get("parameters"), dict)):
+        return load_params(name_or_path), vehicle, []
+    notes: list[str] = []
+    base = {n: e for n, e in doc["parameters"].items() if n in UNITS}
+    mechanisms = mechanisms_from_result(doc, notes)
+    try:
+        params = make_params(mechanisms=mechanisms, **{n: _number(path, n, e) for n, e in base.items()})
+    except ValueError as err:
+        raise UserError(f"parameter file {path}: {err}") from None
+    if mechanisms:
+        notes.append(f"{path.name}: simulated with " + ", ".join(m.effect.replace("_", " ") for m in mechanisms)
+                     + " as the fit had them")
+    return params, vehicle_from_result(doc, vehicle, notes), notes
+
+
+def _number(path: Path, name: str, entry) -> float:
+    value = entry.get("value") if isinstance(entry, dict) else entry
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise UserError(f"parameter file {path}: {name!r} must have a finite numeric value, got {value!r}")
+    return float(value)
+
+
 def run(args: argparse.Namespace) -> int:
     import jax
 
@@ -72,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     import sys
 
     from identify.report.results import write_text_atomic
-    from sim import FrontWheelBlock, events_ms, load_params, load_vehicle, simulate
+    from sim import FrontWheelBlock, events_ms, load_vehicle, simulate
     from identify.report.trajectory_csv import trajectory_csv
 
     speed_kmh = DEFAULT_SPEED_KMH if args.speed is None else args.speed
@@ -84,7 +126,9 @@ def run(args: argparse.Namespace) -> int:
         check_simulate_out(args.out, args.force)
 
     vehicle = load_vehicle(args.vehicle)
-    params = load_params(args.params)
+    params, vehicle, notes = simulated_model(args.params, vehicle)
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
     if args.block_front_wheels:
         params = dataclasses.replace(params, mechanisms=params.mechanisms + (FrontWheelBlock.at_tyre(vehicle),))
     traj = simulate(params, vehicle, speed_kmh / 3.6, duration=args.duration_ms / 1000.0)

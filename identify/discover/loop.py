@@ -134,6 +134,8 @@ class DiscoveryResult:
     rounds : per round, the candidates tried (list of :class:`Trial`).
     missing : the estimated missing force (``identify.discover.missing_force.MissingForce``) when
         misfit remained, else None.
+    alternatives : the models discovery did not adopt that the recording does not rule out
+        (:func:`alternatives`); how far they put the parameters widens ``final``'s stds.
     """
 
     discoveries: list[dict]
@@ -144,6 +146,7 @@ class DiscoveryResult:
     after: ResidualAnalysis
     rounds: list[list[Trial]]
     missing: object = None
+    alternatives: list = dataclasses.field(default_factory=list)
 
     @property
     def effects(self) -> list[str]:
@@ -400,7 +403,7 @@ def phases_spanned(window, phases) -> str:
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     """'' when the fitted candidate is a finding, else why not. Every candidate: no prior
     pulled beyond 3 sigma, no parameter at a bound or undetermined, a depth the crush reaches
-    and the data fix; then its own evidence check over the window where it acts and its own
+    and the data fix (an engine's gap, too); then its own evidence check over the window where it acts and its own
     rules (``Candidate.evidence``, ``Candidate.implausible``); and a candidate with an evidence
     check must act somewhere in the recording (``Candidate.acting``: a rear axle candidate
     whose model never lifts the rear lowered the misfit with its spring, not with a lift)."""
@@ -421,6 +424,10 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
             return f"its depth ({value:.3f} m) is not reached (maximum crush {crush_max:.3f} m)"
         if p.name.endswith(".depth") and sd > 0.1:
             return f"its depth is not determined (std {sd:.3f} m)"
+        # where an engine meets the barrier is its depth: on two clean scored worlds an
+        # engine the data placed at 0.61 +- 0.32 m and 0.66 +- 0.73 m was named
+        if p.name.endswith(".gap") and fr.std_data.get(p.name, sd) > 0.1:
+            return f"where it meets the barrier is not determined (gap std {fr.std_data.get(p.name, sd):.3f} m)"
     candidate = BY_EFFECT[effect]
     window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
     if window is not None:
@@ -493,6 +500,7 @@ def discover(
         return cv_cache[key]
 
     now = before
+    fits = {}
     while screen and len(accepted) - len(measured) < options.max_effects:
         fits = {}
         todo = [c for c in CANDIDATES if c.effect not in accepted]
@@ -571,8 +579,24 @@ def discover(
     added = [e for e in accepted if e not in measured]
     if added:
         final = with_model_choice(final, base, added)
+    alts = alternatives(rounds, fits, current, missing, vehicle)
+    shift = alternatives_shift(current, alts)
+    if any(shift.values()):
+        final = widened_by_choice(final, shift, lambda name: _alternatives_reason(name, final, alts, shift[name]),
+                                  at_least=True)
     status = _status(discoveries, before, after, rounds)
-    return DiscoveryResult(discoveries, final, start, status, before, after, rounds, missing)
+    return DiscoveryResult(discoveries, final, start, status, before, after, rounds, missing, alts)
+
+
+def _alternatives_reason(name: str, fr: FitResult, alts: list[Alternative], shift: float) -> str:
+    """Why ``name`` is not identified when the models discovery did not adopt put it elsewhere."""
+    unit = fr.units.get(name, "")
+    moved = [a for a in alts if name in a.values]
+    farthest = sorted(moved, key=lambda a: -alternatives_shift(fr, [a]).get(name, 0.0))[:3]
+    where = ", ".join(f"{a.label} {a.values[name]:.4g} (BIC {a.delta_bic:+.0f})" for a in farthest)
+    return (f"models of the recording that discovery did not adopt, and that the recording does not rule out, put it"
+            f" elsewhere ({where}; this model {fr.values[name]:.4g} {unit}): weighted by how well each fits, the"
+            f" choice of model alone leaves it uncertain by {shift:.3g} {unit}").replace(" )", ")")
 
 
 def _final(fr: FitResult, accepted) -> FitResult:
@@ -592,9 +616,7 @@ def _final(fr: FitResult, accepted) -> FitResult:
 def with_model_choice(fr: FitResult, base: FitResult, added, choice: str | None = None) -> FitResult:
     """``fr`` (the model with the mechanisms ``added`` by discovery) with each parameter it
     shares with ``base`` (the base model's fit to the same recording, weighted alike) widened
-    by how far those mechanisms moved it: |fr - base| joins the model's own error in
-    quadrature, and a collision parameter that no longer meets its ``NOT_IDENTIFIED`` limit is
-    marked not identified, saying why.
+    by how far those mechanisms moved it (:func:`widened_by_choice`).
 
     The model-error table (``identify.fitting.model_error``) was calibrated on the base model:
     it says nothing of a model discovery changed, and discovery's choice is not a measurement.
@@ -607,30 +629,130 @@ def with_model_choice(fr: FitResult, base: FitResult, added, choice: str | None 
     holds for a measured engine fitted as a second body that the cabin's motion does not bear
     out against the base model on the cabin alone (``identify.identification``; ``choice``
     then names it in the reason)."""
-    from identify.fitting.collision_fit import NOT_IDENTIFIED, spread_of
-
     shift = {n: abs(fr.values[n] - base.values[n]) for n in fr.names if n in base.values}
-    std_model = {**fr.std_model, **{n: math.hypot(fr.std_model.get(n, 0.0), d) for n, d in shift.items()}}
-    std = {**fr.std, **{n: math.hypot(fr.std_data.get(n, fr.std[n]), std_model[n]) for n in shift}}
-    cov = np.array(fr.covariance, float, copy=True)
-    for i, n in enumerate(fr.names):
-        if n in shift:
-            cov[i, i] += shift[n] ** 2
-    out = dataclasses.replace(fr, std=std, std_model=std_model, covariance=cov, model_choice=shift,
-                              identified=dict(fr.identified))
     mechanisms = ", ".join(e.replace("_", " ") for e in added)
     whose = "discovery's" if choice is None else "the model's"
     choice = choice or f"the mechanism discovery added ({mechanisms})"
+    return widened_by_choice(fr, shift, lambda name: (
+        f"{choice} moved it from {base.values[name]:.4g} to {fr.values[name]:.4g} {fr.units[name]}; both models fit"
+        f" the recording, and the choice between them is {whose}, not a measurement"))
+
+
+def widened_by_choice(fr: FitResult, shift: dict[str, float], why, at_least: bool = False) -> FitResult:
+    """``fr`` with each parameter in ``shift`` (name -> how far another model of the same
+    recording puts it, its units) widened by it: the shift joins the model's own error in
+    quadrature (``std_model``, ``std``, the covariance's diagonal, and ``model_choice``,
+    which adds up every such shift alike), or with ``at_least`` the std becomes at least the
+    shift (the model's own error, calibrated on clean worlds, already covers what the shift
+    does not exceed); a collision parameter that no longer meets its ``NOT_IDENTIFIED`` limit
+    is marked not identified, ``why(name)`` saying what moved it. ``fr`` itself is left as it
+    was."""
+    from identify.fitting.collision_fit import NOT_IDENTIFIED, spread_of
+
+    shift = {n: float(d) for n, d in shift.items() if n in fr.names}
+    data = {n: fr.std_data.get(n, fr.std[n]) for n in shift}
+    if at_least:
+        total = {n: max(fr.std[n], d) for n, d in shift.items()}
+        std_model = {**fr.std_model, **{n: math.sqrt(max(total[n] ** 2 - data[n] ** 2, 0.0)) for n in shift}}
+    else:
+        std_model = {**fr.std_model, **{n: math.hypot(fr.std_model.get(n, 0.0), d) for n, d in shift.items()}}
+    std = {**fr.std, **{n: math.hypot(data[n], std_model[n]) for n in shift}}
+    cov = np.array(fr.covariance, float, copy=True)
+    for i, n in enumerate(fr.names):
+        if n in shift:
+            cov[i, i] += std[n] ** 2 - fr.std[n] ** 2
+    model_choice = {**fr.model_choice, **{n: math.hypot(fr.model_choice.get(n, 0.0), d) for n, d in shift.items()}}
+    out = dataclasses.replace(fr, std=std, std_model=std_model, covariance=cov, model_choice=model_choice,
+                              identified=dict(fr.identified))
     for name, (kind, limit) in NOT_IDENTIFIED.items():
         if name not in shift or not out.identified.get(name, (True, ""))[0]:
             continue
         spread = spread_of(name, fr.values[name], std[name])
         if spread > limit:
             size = f"{100 * spread:.0f} %" if kind == "relative" else f"{spread:.3g}"
-            out.mark_not_identified(name, (
-                f"not identified (std {size}): {choice} moved it from"
-                f" {base.values[name]:.4g} to {fr.values[name]:.4g} {fr.units[name]}; both models fit the"
-                f" recording, and the choice between them is {whose}, not a measurement"))
+            out.mark_not_identified(name, f"not identified (std {size}): {why(name)}")
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Alternative:
+    """A model of the recording that discovery did not adopt and the recording does not rule
+    out: ``label`` (a candidate's effect, or "unexplained force"), ``delta_bic`` its BIC
+    against the reported model (negative: it fits better), ``values`` where it puts the
+    reported model's parameters (name -> value, their units)."""
+
+    label: str
+    delta_bic: float
+    values: dict[str, float]
+
+
+def alternatives(rounds: list[list[Trial]], fits: dict[str, FitResult], current: FitResult, missing,
+                 vehicle) -> list[Alternative]:
+    """The models of the last round of discovery that were not accepted but that the
+    recording does not refute, against ``current`` (the model the round scored them
+    against, which must be the reported one: no candidate accepted in that round): each
+    settled candidate fit (``fits``, effect -> FitResult) that :func:`_refuted` does not
+    rule out, however it fared otherwise (a depth the data do not fix, a shape a generic
+    force fits better, a BIC gain short of the threshold); and the missing force estimated
+    on ``current`` (``missing``: ``identify.discover.missing_force``, with its linearised
+    refit of the parameters), or None."""
+    out = []
+    if rounds and not any(tr.accepted for tr in rounds[-1]):
+        for tr in rounds[-1]:
+            alt = fits.get(tr.effect)
+            if alt is None or not tr.settled or not math.isfinite(tr.delta_bic) or _refuted(tr.effect, alt, vehicle):
+                continue
+            out.append(Alternative(tr.effect.replace("_", " "), tr.delta_bic,
+                                   {n: alt.values[n] for n in current.names if n in alt.values}))
+    if missing is not None and missing.parameter_shift:
+        values = {n: current.values[n] + d for n, d in missing.parameter_shift.items()}
+        if not _beyond_range(values):
+            out.append(Alternative("an unexplained force", missing.bic_after - missing.bic_before, values))
+    return out
+
+
+def _beyond_range(values: dict[str, float]) -> bool:
+    """Whether a base or nuisance parameter of ``values`` lies at or beyond a bound of its
+    range (``FreeParameter.at_bound``): the missing force's refit of the parameters is
+    linearised, and far from the fit it is no model (on a development world it put
+    k_restitution at -1.5e9 N/m^3 and the restitution at 0.96)."""
+    from identify.fitting.model import base_parameters
+
+    return any(p.name in values and p.at_bound(values[p.name]) for p in base_parameters(face_friction=True))
+
+
+def _refuted(effect: str, fr: FitResult, vehicle) -> bool:
+    """Whether the fitted candidate is ruled out: what was known before the fit (a prior
+    beyond 3 sigma), one of its own parameters at a bound of its range (the range, not the
+    recording, set it; on a development world a rear axle stiffness 1000 times its scale put
+    the impact speed 0.49 m/s off), or its own evidence check over the window where it acts.
+    A base parameter at its bound is the current model's too, and rules out nothing."""
+    candidate = BY_EFFECT[effect]
+    if any(n in fr.at_bound for n in candidate.names):
+        return True
+    if any(p["conflict"] for n, p in fr.pulls().items() if n not in NUISANCE):
+        return True
+    window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
+    return window is not None and bool(candidate.evidence(fr, vehicle, window)[0])
+
+
+def alternatives_shift(current: FitResult, alts: list[Alternative]) -> dict[str, float]:
+    """name -> how far from ``current``'s value the ``alts`` put each of its parameters: the
+    largest distance, each alternative's weighed by the square root of its probability
+    relative to ``current`` as its BIC approximates it, exp(-BIC/2) (Raftery 1995, "Bayesian
+    model selection in social research"), capped at 1. A model that fits better counts in
+    full, whichever of several does: the recording does not say which law is right, and the
+    reported number is quoted no closer than any of them (an average would let the best fit
+    of several decide alone: on a development world a candidate that left k_compression
+    unchanged outweighed, by its BIC, two that also fitted better than the reported model
+    and put it 55 % and 72 % lower, the truth being 50 % lower). One 10 worse counts by
+    exp(-2.5), 8 %."""
+    out: dict[str, float] = {}
+    for a in alts:
+        weight = math.exp(-0.25 * max(a.delta_bic, 0.0))
+        for n, v in current.values.items():
+            if n in current.names and n in a.values:
+                out[n] = max(out.get(n, 0.0), weight * abs(a.values[n] - v))
     return out
 
 

@@ -37,7 +37,8 @@ class MissingForce:
     window_ms : where |F| exceeds a quarter of its peak; peak_n, t_peak_ms, impulse_ns;
     rms_before_m, rms_after_m : x residual RMS without and with the force; bic_before,
     bic_after; n_terms : pulses selected; shape : words about its form; description : the
-    full sentence for the report.
+    full sentence for the report; parameter_shift : how far each fitted parameter of the
+    model moved (its units) when the force was added (the linearised refit).
     """
 
     t_ms: np.ndarray
@@ -57,6 +58,7 @@ class MissingForce:
     phase: str
     shape: str
     description: str
+    parameter_shift: dict = dataclasses.field(default_factory=dict)
 
     def as_discovery(self, fr=None) -> dict:
         """The entry of result.json's "discoveries"."""
@@ -219,6 +221,7 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
         bic_before=chi2_0, bic_after=chi2 + len(chosen) * penalty, n_terms=len(chosen),
         crush_m=(round(float(crush.min()), 3), round(float(crush.max()), 3)), phase=phase, shape=shape,
         description=description,
+        parameter_shift={n: float(c) for n, c in zip(fr.names, coef_all[k_f:])},
     )
 
 

@@ -36,8 +36,10 @@ def model_choice_sentence(parameters: dict) -> str:
         return ""
     parts = ", ".join(f"{n} by {v:.3g} {parameters[n].get('unit', '')}".rstrip() for n, v in moved.items())
     return (f" It also holds how far the choice of model moved each parameter ({parts}): the mechanisms discovery"
-            f" added, against the base model's fit, or a measured engine the cabin's motion does not bear out,"
-            f" against the base model on the cabin alone; that choice is no measurement.")
+            f" added, against the base model's fit; the models discovery did not adopt that the recording does not"
+            f" rule out (a candidate that fits better but failed a check, the unexplained force), weighted by how"
+            f" well each fits; or a measured engine the cabin's motion does not bear out, against the base model on"
+            f" the cabin alone. That choice is no measurement.")
 
 
 def prior_lines(priors: dict) -> list[str]:

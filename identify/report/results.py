@@ -405,3 +405,24 @@ def mechanisms_from_result(doc: dict, notes: list[str]) -> tuple:
         except (TypeError, ValueError) as err:
             notes.append(f"effect {effect!r} left out: its parameters {sorted(values)} do not build the mechanism ({err})")
     return tuple(out)
+
+
+def vehicle_from_result(doc: dict, vehicle, notes: list[str]):
+    """``vehicle`` with the changes a result.json (``doc``) discovered in it (the fitted
+    ``rear_axle_lift.rear_axle_stiffness`` in its ``"parameters"``: ``identify.fitting.model.
+    VEHICLE_OVERRIDES``), a line in ``notes`` saying so; ``vehicle`` itself when none."""
+    import jax.numpy as jnp
+
+    from identify.fitting.model import VEHICLE_OVERRIDES, vehicle_with
+
+    table = doc.get("parameters") if isinstance(doc.get("parameters"), dict) else {}
+    overrides = {}
+    for name in VEHICLE_OVERRIDES:
+        entry = table.get(name)
+        value = entry.get("value") if isinstance(entry, dict) else entry
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
+            overrides[name] = jnp.asarray(float(value))
+    if not overrides:
+        return vehicle
+    notes.append("vehicle changed as discovered: " + ", ".join(f"{k} = {float(v):.6g}" for k, v in overrides.items()))
+    return vehicle_with(vehicle, overrides)

@@ -131,10 +131,12 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None, measured=
     """The candidate's starting guesses in physical units (``effect.field`` -> value): its
     ``starts`` (and its ``measured_starts`` when ``measured``: the recording measures the
     body itself), each rule evaluated on the current fit ``fr`` (None before any fit), the
-    vehicle and the current residual analysis."""
+    vehicle and the current residual analysis; a guess that repeats an earlier one (a rule
+    that falls back on the typical value) is tried once."""
     starts = (*candidate.starts, *candidate.measured_starts) if measured else candidate.starts
-    return [{f"{candidate.effect}.{field}": float(value(fr, vehicle, analysis) if callable(value) else value)
-             for field, value in start.items()} for start in starts]
+    guesses = [{f"{candidate.effect}.{field}": float(value(fr, vehicle, analysis) if callable(value) else value)
+                for field, value in start.items()} for start in starts]
+    return [g for i, g in enumerate(guesses) if g not in guesses[:i]]
 
 
 def kept_mechanisms(params: Params, accepted) -> tuple:
