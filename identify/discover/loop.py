@@ -31,7 +31,10 @@ The loop (one round per effect):
 4. the loop stops when the residuals are noise or no candidate is justified. Misfit that
    remains is estimated as a missing force (``identify.discover.missing_force``) and reported as
    ``unexplained`` with its window and a description of its shape, when that force is
-   itself justified by the BIC.
+   itself justified by the BIC;
+5. the reported parameters are quoted no closer than the base model (:func:`with_model_choice`)
+   and the models discovery did not adopt but the recording does not rule out
+   (:func:`alternatives`: the last round's other candidates, the unexplained force) put them.
 """
 
 from __future__ import annotations
