@@ -219,13 +219,17 @@ def test_simulate_from_a_result_json_brings_the_fitted_model_along(fitted_folder
     rigid.write_text(json.dumps({n: doc["parameters"][n]["value"] for n in
                                  ("k_compression", "k_restitution", "restitution", "dz_contact")}))
     runs = {}
-    for name, params in (("fitted", fitted_folder / "result.json"), ("rigid", rigid)):
+    # the result.json's own fitted speed, unless --speed is given; the rigid run at the same speed
+    speed = ["--speed", str(doc["impact_speed_kmh"])]
+    for name, params, extra in (("fitted", fitted_folder / "result.json", []), ("rigid", rigid, speed)):
         out = tmp_path / f"{name}.csv"
         assert main(["simulate", "--vehicle", "audi_a4", "--params", str(params), "--duration-ms", "120",
-                     "--out", str(out)]) == 0
+                     "--out", str(out), *extra]) == 0
         runs[name] = np.genfromtxt(out, delimiter=",", names=True)
         runs[name + " says"] = capsys.readouterr().err
     assert "simulated with engine impact as the fit had them" in runs["fitted says"]
-    assert "engine" not in runs["rigid says"]
+    assert f"at the fitted impact speed, {doc['impact_speed_kmh']:.2f} km/h" in runs["fitted says"]
+    assert f"at {doc['impact_speed_kmh']:g} km/h" in runs["fitted says"]
+    assert "engine" not in runs["rigid says"] and "fitted impact speed" not in runs["rigid says"]
     # the engine lags the cabin at first: the cabin's displacement differs from the rigid car's by millimetres
     assert np.max(np.abs(runs["fitted"]["x_m"] - runs["rigid"]["x_m"])) > 1e-3

@@ -22,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--params", required=True,
         help="named set (vsim_default, paper_identified) or a JSON file; an 'identify fit' result.json brings its "
         "model along (the engine it assumed, the mechanisms and vehicle changes it discovered)")
-    p.add_argument("--speed", type=float, default=None, help="impact speed in km/h (default 56.3, the paper's)")
+    p.add_argument("--speed", type=float, default=None,
+                   help="impact speed in km/h (default: a result.json's fitted speed, else 56.3, the paper's)")
     p.add_argument("--duration-ms", type=float, default=300.0, help="simulated time after contact (default 300)")
     p.add_argument(
         "--block-front-wheels",
@@ -66,11 +67,12 @@ def check_simulate_out(out: Path, force: bool) -> None:
 
 
 def simulated_model(name_or_path: str, vehicle):
-    """(Params, vehicle, notes) to simulate: a named set or parameter file (``sim.load_params``),
-    or a result.json of ``identify fit`` (it has a ``"fit"``) with the model it fitted: its
-    collision parameters, the base model's engine it assumed and the mechanisms it discovered
-    (``identify.report.results.mechanisms_from_result``), and the vehicle changed as discovered;
-    ``notes`` says what was rebuilt or left out."""
+    """(Params, vehicle, impact speed km/h or None, notes) to simulate: a named set or
+    parameter file (``sim.load_params``; no speed), or a result.json of ``identify fit`` (it
+    has a ``"fit"``) with the model it fitted: its collision parameters, the base model's
+    engine it assumed and the mechanisms it discovered
+    (``identify.report.results.mechanisms_from_result``), the vehicle changed as discovered,
+    and its fitted impact speed; ``notes`` says what was rebuilt or left out."""
     import json
 
     from identify.report.results import mechanisms_from_result, vehicle_from_result
@@ -85,7 +87,7 @@ def simulated_model(name_or_path: str, vehicle):
         except (OSError, UnicodeDecodeError, ValueError, RecursionError):
             doc = None  # load_params says what is wrong with it
     if not (isinstance(doc, dict) and isinstance(doc.get("fit"), dict) and isinstance(doc.get("parameters"), dict)):
-        return load_params(name_or_path), vehicle, []
+        return load_params(name_or_path), vehicle, None, []
     notes: list[str] = []
     base = {n: e for n, e in doc["parameters"].items() if n in UNITS}
     mechanisms = mechanisms_from_result(doc, notes)
@@ -96,7 +98,9 @@ def simulated_model(name_or_path: str, vehicle):
     if mechanisms:
         notes.append(f"{path.name}: simulated with " + ", ".join(m.effect.replace("_", " ") for m in mechanisms)
                      + " as the fit had them")
-    return params, vehicle_from_result(doc, vehicle, notes), notes
+    speed = doc.get("impact_speed_kmh")
+    speed = float(speed) if isinstance(speed, (int, float)) and not isinstance(speed, bool) else None
+    return params, vehicle_from_result(doc, vehicle, notes), speed, notes
 
 
 def _number(path: Path, name: str, entry) -> float:
@@ -117,8 +121,7 @@ def run(args: argparse.Namespace) -> int:
     from sim import FrontWheelBlock, events_ms, load_vehicle, simulate
     from identify.report.trajectory_csv import trajectory_csv
 
-    speed_kmh = DEFAULT_SPEED_KMH if args.speed is None else args.speed
-    if not (math.isfinite(speed_kmh) and 0 < speed_kmh <= 360):
+    if args.speed is not None and not (math.isfinite(args.speed) and 0 < args.speed <= 360):
         raise UserError(f"--speed must be in (0, 360] km/h, got {args.speed}")
     if not (math.isfinite(args.duration_ms) and 1 <= args.duration_ms <= 10000):
         raise UserError(f"--duration-ms must be in [1, 10000], got {args.duration_ms}")
@@ -126,7 +129,12 @@ def run(args: argparse.Namespace) -> int:
         check_simulate_out(args.out, args.force)
 
     vehicle = load_vehicle(args.vehicle)
-    params, vehicle, notes = simulated_model(args.params, vehicle)
+    params, vehicle, fitted_kmh, notes = simulated_model(args.params, vehicle)
+    speed_kmh = args.speed if args.speed is not None else fitted_kmh if fitted_kmh is not None else DEFAULT_SPEED_KMH
+    if args.speed is None and fitted_kmh is not None:
+        if not (math.isfinite(fitted_kmh) and 0 < fitted_kmh <= 360):
+            raise UserError(f"--params {args.params}: its impact_speed_kmh {fitted_kmh} is not in (0, 360] km/h")
+        notes.append(f"at the fitted impact speed, {fitted_kmh:.2f} km/h (--speed to change it)")
     for note in notes:
         print(f"note: {note}", file=sys.stderr)
     if args.block_front_wheels:
