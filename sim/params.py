@@ -160,6 +160,12 @@ def load_params(name_or_path: str | Path, mechanisms: tuple[Mechanism, ...] = ()
     table = doc.get("parameters", doc) if isinstance(doc, dict) else None
     if not isinstance(table, dict):
         raise ConfigError(f"parameter file {path}: expected an object of parameters")
+    return params_from_table(table, path, mechanisms)
+
+
+def params_from_table(table: dict, path, mechanisms: tuple[Mechanism, ...] = ()) -> Params:
+    """Validated Params from a parameter table (name -> ``{"value": number, ...}`` or a bare
+    number) read from ``path``; ConfigError naming the file and field otherwise."""
     values = {}
     for name, entry in table.items():
         value = entry.get("value") if isinstance(entry, dict) else entry

@@ -76,8 +76,8 @@ def simulated_model(name_or_path: str, vehicle):
     import json
 
     from identify.report.results import mechanisms_from_result, vehicle_from_result
-    from sim import load_params, make_params
-    from sim.params import UNITS
+    from sim import load_params
+    from sim.params import UNITS, params_from_table
 
     path = Path(name_or_path)
     doc = None
@@ -89,25 +89,14 @@ def simulated_model(name_or_path: str, vehicle):
     if not (isinstance(doc, dict) and isinstance(doc.get("fit"), dict) and isinstance(doc.get("parameters"), dict)):
         return load_params(name_or_path), vehicle, None, []
     notes: list[str] = []
-    base = {n: e for n, e in doc["parameters"].items() if n in UNITS}
     mechanisms = mechanisms_from_result(doc, notes)
-    try:
-        params = make_params(mechanisms=mechanisms, **{n: _number(path, n, e) for n, e in base.items()})
-    except ValueError as err:
-        raise UserError(f"parameter file {path}: {err}") from None
+    params = params_from_table({n: e for n, e in doc["parameters"].items() if n in UNITS}, path, mechanisms)
     if mechanisms:
         notes.append(f"{path.name}: simulated with " + ", ".join(m.effect.replace("_", " ") for m in mechanisms)
                      + " as the fit had them")
     speed = doc.get("impact_speed_kmh")
     speed = float(speed) if isinstance(speed, (int, float)) and not isinstance(speed, bool) else None
     return params, vehicle_from_result(doc, vehicle, notes), speed, notes
-
-
-def _number(path: Path, name: str, entry) -> float:
-    value = entry.get("value") if isinstance(entry, dict) else entry
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise UserError(f"parameter file {path}: {name!r} must have a finite numeric value, got {value!r}")
-    return float(value)
 
 
 def run(args: argparse.Namespace) -> int:

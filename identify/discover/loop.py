@@ -406,17 +406,15 @@ def phases_spanned(window, phases) -> str:
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     """'' when the fitted candidate is a finding, else why not. Every candidate: no prior
     pulled beyond 3 sigma, no parameter at a bound or undetermined, a depth the crush reaches
-    and the data fix (an engine's gap, too); then its own evidence check over the window where it acts and its own
-    rules (``Candidate.evidence``, ``Candidate.implausible``); and a candidate with an evidence
-    check must act somewhere in the recording (``Candidate.acting``: a rear axle candidate
-    whose model never lifts the rear lowered the misfit with its spring, not with a lift)."""
+    and the data fix (an engine's gap, too); then its own evidence check over the window
+    where it acts and its own rules (``Candidate.evidence``, ``Candidate.implausible``); and
+    a candidate with an evidence check must act somewhere in the recording
+    (``Candidate.acting``: a rear axle candidate whose model never lifts the rear lowered the
+    misfit with its spring, not with a lift)."""
     crush_max = float(np.max(np.asarray(fr.trajectory.crush)))
-    # the measured nuisances' pulls (speed, contact) are the final model's to report; here
-    # the priors of what the model is made of (an engine's mass and gap)
-    conflicts = [f"{n} {p['pull']:+.1f} sigma" for n, p in fr.pulls().items() if p["conflict"] and n not in NUISANCE]
-    if conflicts:
-        return ("its fit pulls what was known before the fit beyond 3 sigma (" + ", ".join(conflicts) +
-                "): it trades against the prior rather than explaining the misfit")
+    why = _prior_conflicts(fr)
+    if why:
+        return why
     for p in BY_EFFECT[effect].parameters:
         value, sd = fr.values[p.name], fr.std[p.name]
         if fr.at_bound.get(p.name):
@@ -432,17 +430,34 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
         if p.name.endswith(".gap") and fr.std_data.get(p.name, sd) > 0.1:
             return f"where it meets the barrier is not determined (gap std {fr.std_data.get(p.name, sd):.3f} m)"
     candidate = BY_EFFECT[effect]
-    window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
-    if window is not None:
-        why = candidate.evidence(fr, vehicle, window)[0]
-        if why:
-            return why
+    why, window = _evidence_against(effect, fr, vehicle)
+    if why:
+        return why
     why = candidate.implausible(fr, vehicle)
     if not why and candidate.evidence is not None and window is None:
         # what lowered the misfit was then the candidate's parameters (a rear spring), not its physics
         why = (f"its fitted model never shows it within the recording (no {effect.replace('_', ' ')} there):"
                " whatever its parameters changed, it is not that mechanism")
     return why
+
+
+def _prior_conflicts(fr: FitResult) -> str:
+    """Why a candidate's fit ``fr`` is ruled out by what was known before it (a prior pulled
+    beyond 3 sigma), or ''. The measured nuisances' pulls (speed, contact) are the final
+    model's to report; here the priors of what the model is made of (an engine's mass and gap)."""
+    conflicts = [f"{n} {p['pull']:+.1f} sigma" for n, p in fr.pulls().items() if p["conflict"] and n not in NUISANCE]
+    if not conflicts:
+        return ""
+    return ("its fit pulls what was known before the fit beyond 3 sigma (" + ", ".join(conflicts) +
+            "): it trades against the prior rather than explaining the misfit")
+
+
+def _evidence_against(effect: str, fr: FitResult, vehicle) -> tuple[str, tuple[float, float] | None]:
+    """(why the candidate's own evidence check contradicts its fit ``fr`` over the window where
+    it acts, or ''; that window in ms, None where it never acts or has no check)."""
+    candidate = BY_EFFECT[effect]
+    window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
+    return (candidate.evidence(fr, vehicle, window)[0] if window is not None else ""), window
 
 
 def discover(
@@ -730,13 +745,8 @@ def _refuted(effect: str, fr: FitResult, vehicle) -> bool:
     recording, set it; on a development world a rear axle stiffness 1000 times its scale put
     the impact speed 0.49 m/s off), or its own evidence check over the window where it acts.
     A base parameter at its bound is the current model's too, and rules out nothing."""
-    candidate = BY_EFFECT[effect]
-    if any(n in fr.at_bound for n in candidate.names):
-        return True
-    if any(p["conflict"] for n, p in fr.pulls().items() if n not in NUISANCE):
-        return True
-    window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
-    return window is not None and bool(candidate.evidence(fr, vehicle, window)[0])
+    return (any(n in fr.at_bound for n in BY_EFFECT[effect].names) or bool(_prior_conflicts(fr))
+            or bool(_evidence_against(effect, fr, vehicle)[0]))
 
 
 def alternatives_shift(current: FitResult, alts: list[Alternative]) -> dict[str, float]:
