@@ -42,6 +42,7 @@ from synth.world import EFFECTS
 
 SEED_BASE = 910_000   # benchmark seeds; tests use seeds below 1000
 CALIBRATION_SEED_BASE = 950_000   # the worlds identify/fitting/model_error.json is calibrated on (--calibration)
+DEVELOPMENT_SEED_BASE = 960_000   # the worlds a new rule is tried on before it is scored (--development)
 # 40 worlds: clean and each effect, interleaved so that a short run (--n) sees a mix
 SCHEDULE = ("clean", "stiffness_zone", "clean", "front_wheel_block", "clean", "rate_dependence",
             "clean", "engine_impact", "rear_axle_lift")
@@ -146,6 +147,9 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
         # candidates whose fit ended worse than the model they extend: never asked (``Trial.settled``)
         row["unsettled"] = sorted({t["effect"] for r in doc.get("discovery_rounds", []) for t in r
                                    if not t.get("settled", True)})
+        # each round's candidates and why each was or was not accepted, to read a miss by
+        row["rounds"] = [[{k: t.get(k) for k in ("effect", "delta_bic", "accepted", "reason")} for t in r]
+                         for r in doc.get("discovery_rounds", [])]
         row["rms_mm"] = 1e3 * doc["fit"]["rms_m"]
     return row
 
@@ -300,6 +304,8 @@ def main(argv=None) -> int:
     ap.add_argument("--effect", default=None, choices=EFFECTS, help="every world with this one effect")
     ap.add_argument("--calibration", action="store_true",
                     help=f"the calibration worlds (seeds from {CALIBRATION_SEED_BASE}) instead of the scored ones")
+    ap.add_argument("--development", action="store_true",
+                    help=f"the development worlds (seeds from {DEVELOPMENT_SEED_BASE}), to try a rule on before scoring it")
     ap.add_argument("--json", type=Path, default=None, help="write every row and the summary here")
     ap.add_argument("--keep", type=Path, default=None, help="keep the worlds' folders here")
     ap.add_argument("--face-friction", action="store_true", help="fit as 'identify fit --face-friction'")
@@ -312,7 +318,9 @@ def main(argv=None) -> int:
         return 0
     if a.keep:
         a.keep.mkdir(parents=True, exist_ok=True)
-    base = CALIBRATION_SEED_BASE if a.calibration else SEED_BASE
+    if a.calibration and a.development:
+        ap.error("--calibration and --development are two different sets of worlds: give one")
+    base = CALIBRATION_SEED_BASE if a.calibration else DEVELOPMENT_SEED_BASE if a.development else SEED_BASE
     plan = [(seed, effect, a.format, a.keep, a.face_friction) for seed, effect in world_plan(a.n, a.effect, base)]
     t0 = time.perf_counter()
     rows = []

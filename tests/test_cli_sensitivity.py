@@ -220,6 +220,11 @@ def test_result_without_uncertainty_and_bad_covariance(tmp_path, capsys):
     (folder / "result.json").write_text("{not json")
     code, err = run_bad([str(folder)], capsys)
     assert code == 2 and "not valid JSON" in err
+    for bad, message in (("soft", "must have a finite numeric value"), (-5.0e5, "k_compression")):
+        doc["parameters"]["k_compression"]["value"] = bad
+        (folder / "result.json").write_text(json.dumps(doc))
+        code, err = run_bad([str(folder)], capsys)
+        assert code == 2 and message in err and str(folder) in err and err.count("\n") == 0
 
 
 def test_a_users_folder_is_never_overwritten(tmp_path, capsys):

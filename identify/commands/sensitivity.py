@@ -127,9 +127,9 @@ def load_result(result_dir: Path, speed_kmh, notes):
 
     from identify.sensitivity import INPUTS, Uncertainty
     from identify.report.results import mechanisms_from_result, vehicle_from_result
-    from sim import load_vehicle, make_params
+    from sim import load_vehicle
     from sim.errors import ConfigError
-    from sim.params import UNITS
+    from sim.params import UNITS, params_from_table
 
     path = result_dir / "result.json"
     if not path.is_file():
@@ -150,15 +150,9 @@ def load_result(result_dir: Path, speed_kmh, notes):
         raise UserError(f"{path}: \"vehicle\" must be a vehicle name or path")
     local = result_dir / vehicle_ref
     vehicle = load_vehicle(local if vehicle_ref.endswith(".toml") and local.is_file() else vehicle_ref)
-    table = doc["parameters"]
-    values, stds = {}, {}
+    table = {name: entry for name, entry in doc["parameters"].items() if name in UNITS}
+    stds = {}
     for name, entry in table.items():
-        value = entry.get("value") if isinstance(entry, dict) else entry
-        if name not in UNITS:
-            continue
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise UserError(f"{path}: parameter {name!r} must have a finite numeric value, got {value!r}")
-        values[name] = float(value)
         std = entry.get("std") if isinstance(entry, dict) else None
         if isinstance(std, (int, float)) and math.isfinite(std) and std > 0:
             if name in INPUTS:
@@ -167,9 +161,10 @@ def load_result(result_dir: Path, speed_kmh, notes):
                 notes.append(f"{name} is not an input of the sensitivity study: held at its fitted value")
     vehicle = vehicle_from_result(doc, vehicle, notes)
     try:
-        params = make_params(mechanisms=mechanisms_from_result(doc, notes), **values)
+        params = params_from_table(table, path, mechanisms_from_result(doc, notes))
     except ConfigError as err:
-        raise UserError(f"{path}: {err}") from None
+        raise UserError(str(err)) from None
+    values = {name: float(getattr(params, name)) for name in table}
 
     if speed_kmh is not None:
         speed = speed_kmh / 3.6
