@@ -151,6 +151,9 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
         row["rounds"] = [[{k: t.get(k) for k in ("effect", "delta_bic", "accepted", "reason")} for t in r]
                          for r in doc.get("discovery_rounds", [])]
         row["rms_mm"] = 1e3 * doc["fit"]["rms_m"]
+        # what was known before the fit (the contact seen, the approach's speed), and how far the fit pulled it
+        row["priors"] = {name: {k: p.get(k) for k in ("prior", "prior_std", "value", "pull")}
+                         for name, p in doc["fit"].get("priors", {}).items()}
     return row
 
 
