@@ -109,6 +109,7 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
             # the fit's contact time counts from the contact frame
             row["fit_contact_err_ms"] = (row["tracking"]["video_contact_time_err_ms"] - 1e3 * tracks.contact_offset_s
                                          + doc["contact_time_ms"])
+            row["contact_notes"] = [n for n in tracks.notes if "contact" in n]  # seen, or why not
             contact = doc.get("nuisance", {}).get("contact_time", {})
             if contact.get("std_data"):
                 row["contact_std_data_ms"] = 1e3 * contact["std_data"]
