@@ -154,7 +154,7 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
         row["rms_mm"] = 1e3 * doc["fit"]["rms_m"]
         # what was known before the fit (the contact seen, the approach's speed), and how far the fit pulled it
         row["priors"] = {name: {k: p.get(k) for k in ("prior", "prior_std", "value", "pull")}
-                         for name, p in doc["fit"].get("priors", {}).items()}
+                         for name, p in doc.get("priors", {}).items()}
     return row
 
 

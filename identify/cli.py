@@ -125,6 +125,10 @@ def _main(argv: list[str] | None) -> int:
     _quiet_native_libraries()
     parser = build_parser()
     args = parser.parse_args(argv)
+    if getattr(args, "compiles", False):
+        from identify.compile_cache import enable
+
+        enable()
     try:  # a copy of stderr that a decoder's silencing of fd 2 cannot take away (Ctrl-C's line)
         _STDERR_FD = os.dup(2)
     except OSError:

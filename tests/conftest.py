@@ -1,11 +1,19 @@
-"""Test set-up shared by every test module: float64 on (as the entry points do), and the
-simulations that several tests read, run once per session (JAX compiles take seconds)."""
+"""Test set-up shared by every test module: float64 on (as the entry points do), the command
+line's compilation cache off, and the simulations that several tests read, run once per
+session (JAX compiles take seconds)."""
+
+import os
 
 import jax
 
 jax.config.update("jax_enable_x64", True)
 
 import pytest  # noqa: E402
+
+# the command line keeps its compiled programs in the user's cache (identify.compile_cache):
+# not the tests', which never read or fill it (measured: a run-wide cache shared by the
+# workers did not shorten the suite, 670 s against 593-636 s); test_compile_cache turns it on
+os.environ["IDENTIFY_NO_COMPILE_CACHE"] = "1"
 
 PAPER_SPEED = 56.3 / 3.6  # m/s, the paper's impact speed
 

@@ -35,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fit even when the film contradicts the vehicle file (wheelbase, length); the result "
                    "and report then carry the warning")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, compiles=True)  # keeps its compiled programs (identify.compile_cache)
 
 
 def run(args: argparse.Namespace) -> int:

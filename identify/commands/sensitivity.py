@@ -80,7 +80,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=None,
                    help="output folder (default: RESULT_DIR/sensitivity, else <vehicle>_<params>.sensitivity)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no progress display")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, compiles=True)  # keeps its compiled programs (identify.compile_cache)
 
 
 def parse_range(text: str, speed_in_kmh: bool = True) -> tuple[str, float, float]:

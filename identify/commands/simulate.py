@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="CSV file to write (default: stdout); an existing file is replaced only when it is a CSV "
                    "this command wrote, unless --force")
     p.add_argument("--force", action="store_true", help="replace --out even when it is not one of our CSVs")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, compiles=True)  # keeps its compiled programs (identify.compile_cache)
 
 
 DEFAULT_SPEED_KMH = 56.3
