@@ -15,6 +15,16 @@ import pytest  # noqa: E402
 # workers did not shorten the suite, 670 s against 593-636 s); test_compile_cache turns it on
 os.environ["IDENTIFY_NO_COMPILE_CACHE"] = "1"
 
+
+def pytest_collection_modifyitems(config, items):
+    """The files that hold slow end-to-end tests first, in their own order: the README's
+    ``--dist loadfile`` hands files to the workers in this order, so the long ones start at
+    once and the short ones fill in at the end, instead of one worker running a long file
+    alone while the other has finished."""
+    slow = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in slow)  # stable: the order within each part stays
+
+
 PAPER_SPEED = 56.3 / 3.6  # m/s, the paper's impact speed
 
 

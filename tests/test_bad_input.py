@@ -236,6 +236,7 @@ def test_the_wheelbase_decides_and_an_outline_length_alone_only_warns():
     assert check_film_against_vehicle(SimpleNamespace(geometry=good_hubs), veh, "audi_a4") == []
 
 
+@pytest.mark.slow
 def test_wrong_vehicle_with_force_fits_and_carries_the_warning(tmp_path, capfd):
     # an A4 file with a wheelbase 3 % short: contradicted, and a fit that still converges fast
     car = tmp_path / "a4_short.toml"

@@ -31,6 +31,7 @@ def fitted_folder(a4, tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # the first test to ask for fitted_folder: a whole 'identify fit' run
 def test_result_json_has_the_interface_fields(fitted_folder):
     doc = json.loads((fitted_folder / "result.json").read_text())
     assert doc["vehicle"] == "audi_a4" and doc["fps"] == pytest.approx(1000.0)
