@@ -48,8 +48,8 @@ def enable(directory: str | Path | None = None) -> Path | None:
     if not os.access(folder, os.W_OK | os.X_OK):
         return None
     os.environ[DIR_VARIABLE] = str(folder)
-    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
-    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES", "0")
+    for name, value in _SETTINGS.items():  # what JAX reads when it is imported later
+        os.environ.setdefault(name.upper(), str(value))
     if "jax" in sys.modules:
         import jax
 
