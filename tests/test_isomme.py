@@ -110,6 +110,19 @@ def test_units_are_converted(iso, nhtsa):
     np.testing.assert_allclose(t.barrier[0].values, nhtsa.barrier[0].values, rtol=1e-5, atol=1e-2)
 
 
+@pytest.mark.parametrize("value", ["1e300", "-2e5"])
+def test_a_value_beyond_any_crash_is_a_damaged_file(iso, value, recwarn):
+    # channel 001 is in g: 1e300 g overflows to inf on conversion, -2e5 g stays finite and
+    # would overflow the motion's squares; both are one clear error, and numpy warns of nothing
+    f = iso.parent / "Channel" / "10146.001"
+    lines = f.read_text().splitlines()
+    k = next(i for i, s in enumerate(lines) if ":" not in s) + 100
+    f.write_text("\n".join(lines[:k] + [value] + lines[k + 1:]) + "\n")
+    with pytest.raises(UserError, match=r"10146\.001: channel 001 .* reaches .* m/s\^2, beyond any crash recording's 1e\+05"):
+        read_isomme(iso)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 def test_missing_channel_file(iso):
     (iso.parent / "Channel" / "10146.003").unlink()
     with pytest.raises(UserError, match=r"missing channel file Channel/10146\.003 for channel 003"):

@@ -54,6 +54,11 @@ UNITS = {"g": ("acceleration", G0), "m/s**2": ("acceleration", 1.0), "m/(s*s)": 
          "m/s^2": ("acceleration", 1.0), "m/s2": ("acceleration", 1.0),
          "n": ("force", 1.0), "kn": ("force", 1e3)}
 MOTION_MAIN = ("SECM", "CRME", "SEAT")
+# beyond any crash recording, in SI units (10,000 g; 100 MN, a hundred times a full-width
+# barrier's peak): a value past it is a damaged file, not a measurement (a fuzzed 1e300 in g
+# overflowed to inf on conversion and into the motion's arithmetic)
+PHYSICAL_LIMIT = {"acceleration": 1e5, "force": 1e8}
+SI_UNIT = {"acceleration": "m/s^2", "force": "N"}
 _LINE = re.compile(r"([^:]*[^:\s])\s*:(.*)")
 
 
@@ -251,8 +256,14 @@ def read_isomme(path: str | Path, barrier: bool = True, progress=None) -> Sensor
         if unit.lower() not in UNITS or UNITS[unit.lower()][0] != quantity_wanted:
             raise UserError(f"{f}: {label} is in {unit!r}, expected a unit of {quantity_wanted} "
                             f"({', '.join(k for k, v in UNITS.items() if v[0] == quantity_wanted)})")
-        return Channel(code=code, name=_value(cinfo, "Name of the channel") or text, t=t,
-                       values=y * UNITS[unit.lower()][1], quantity=quantity_wanted)
+        with np.errstate(over="ignore"):
+            values = y * UNITS[unit.lower()][1]
+        if not np.all(np.abs(values) <= PHYSICAL_LIMIT[quantity_wanted]):
+            worst = float(np.max(np.abs(values)))
+            raise UserError(f"{f}: {label} reaches {worst:.3g} {SI_UNIT[quantity_wanted]}, beyond any crash "
+                            f"recording's {PHYSICAL_LIMIT[quantity_wanted]:.0e}: a damaged file?")
+        return Channel(code=code, name=_value(cinfo, "Name of the channel") or text, t=t, values=values,
+                       quantity=quantity_wanted)
 
     def load_engine(entry) -> Channel | None:
         try:
