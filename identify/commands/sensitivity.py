@@ -126,10 +126,10 @@ def load_result(result_dir: Path, speed_kmh, notes):
     import numpy as np
 
     from identify.sensitivity import INPUTS, Uncertainty
-    from identify.report.results import mechanisms_from_result, vehicle_from_result
+    from identify.report.results import model_from_result
     from sim import load_vehicle
     from sim.errors import ConfigError
-    from sim.params import UNITS, params_from_table
+    from sim.params import UNITS
 
     path = result_dir / "result.json"
     if not path.is_file():
@@ -159,9 +159,8 @@ def load_result(result_dir: Path, speed_kmh, notes):
                 stds[name] = float(std)
             else:  # a parameter of the fitted model that is no input here (the barrier face's friction)
                 notes.append(f"{name} is not an input of the sensitivity study: held at its fitted value")
-    vehicle = vehicle_from_result(doc, vehicle, notes)
     try:
-        params = params_from_table(table, path, mechanisms_from_result(doc, notes))
+        params, vehicle = model_from_result(doc, vehicle, path, notes)
     except ConfigError as err:
         raise UserError(str(err)) from None
     values = {name: float(getattr(params, name)) for name in table}

@@ -75,9 +75,8 @@ def simulated_model(name_or_path: str, vehicle):
     and its fitted impact speed; ``notes`` says what was rebuilt or left out."""
     import json
 
-    from identify.report.results import mechanisms_from_result, vehicle_from_result
+    from identify.report.results import model_from_result
     from sim import load_params
-    from sim.params import UNITS, params_from_table
 
     path = Path(name_or_path)
     doc = None
@@ -89,14 +88,13 @@ def simulated_model(name_or_path: str, vehicle):
     if not (isinstance(doc, dict) and isinstance(doc.get("fit"), dict) and isinstance(doc.get("parameters"), dict)):
         return load_params(name_or_path), vehicle, None, []
     notes: list[str] = []
-    mechanisms = mechanisms_from_result(doc, notes)
-    params = params_from_table({n: e for n, e in doc["parameters"].items() if n in UNITS}, path, mechanisms)
-    if mechanisms:
-        notes.append(f"{path.name}: simulated with " + ", ".join(m.effect.replace("_", " ") for m in mechanisms)
-                     + " as the fit had them")
+    params, vehicle = model_from_result(doc, vehicle, path, notes)
+    if params.mechanisms:
+        notes.append(f"{path.name}: simulated with "
+                     + ", ".join(m.effect.replace("_", " ") for m in params.mechanisms) + " as the fit had them")
     speed = doc.get("impact_speed_kmh")
     speed = float(speed) if isinstance(speed, (int, float)) and not isinstance(speed, bool) else None
-    return params, vehicle_from_result(doc, vehicle, notes), speed, notes
+    return params, vehicle, speed, notes
 
 
 def run(args: argparse.Namespace) -> int:

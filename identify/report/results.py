@@ -426,3 +426,16 @@ def vehicle_from_result(doc: dict, vehicle, notes: list[str]):
         return vehicle
     notes.append("vehicle changed as discovered: " + ", ".join(f"{k} = {float(v):.6g}" for k, v in overrides.items()))
     return vehicle_with(vehicle, overrides)
+
+
+def model_from_result(doc: dict, vehicle, path, notes: list[str]):
+    """(Params, vehicle) of the model a result.json (``doc``, read from ``path``) fitted: its
+    collision parameters (validated by ``sim.params.params_from_table``: ConfigError naming
+    ``path`` and the field), the engine it assumed and the mechanisms it discovered
+    (:func:`mechanisms_from_result`), and ``vehicle`` changed as discovered
+    (:func:`vehicle_from_result`); ``notes`` gets what was rebuilt or left out."""
+    from sim.params import UNITS, params_from_table
+
+    table = {name: entry for name, entry in doc["parameters"].items() if name in UNITS}
+    params = params_from_table(table, path, mechanisms_from_result(doc, notes))
+    return params, vehicle_from_result(doc, vehicle, notes)
