@@ -32,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
-from identify.fitting.collision_fit import NOT_IDENTIFIED, spread_of  # noqa: E402
+from identify.fitting.collision_fit import CONTACT_FROM_MOTION, NOT_IDENTIFIED, spread_of  # noqa: E402
 from identify.fitting.model_error import TABLE_FILE, calibrate  # noqa: E402
 
 FORMAT_KIND = {"film": "film", "isomme": "sensors"}  # accuracy.py's --format -> model_error.KINDS
@@ -40,7 +40,7 @@ FORMAT_KIND = {"film": "film", "isomme": "sensors"}  # accuracy.py's --format ->
 # name -> "relative" (error / truth) or "absolute" (error in the parameter's unit)
 SCALE_OF = {"k_compression": "relative", "k_restitution": "relative", "restitution": "absolute",
          "dz_contact": "absolute", "impact_speed": "relative", "contact_time": "absolute",
-         "engine_impact.engine_mass": "relative", "engine_impact.gap": "absolute"}
+         "engine_impact.engine_mass": "relative", "engine_impact.gap": "absolute", CONTACT_FROM_MOTION: "absolute"}
 
 
 def identified_by_the_data(name: str, p: dict) -> bool:
@@ -75,6 +75,11 @@ def errors_of(row: dict) -> dict[str, tuple[float, float]]:
         out["impact_speed"] = (row["speed_err_pct"] / 100.0, speed_std / 100.0)
     if row.get("fit_contact_err_ms") is not None and row.get("contact_std_data_ms"):  # a film's, s
         out["contact_time"] = (row["fit_contact_err_ms"] / 1e3, row["contact_std_data_ms"] / 1e3)
+        # a contact held where the film saw it: where the fitted channels alone would put it
+        held = row.get("priors", {}).get("contact_time") or {}
+        if held.get("held") and held.get("std_data"):
+            out[CONTACT_FROM_MOTION] = (row["fit_contact_err_ms"] / 1e3 + held["value"] - held["prior"],
+                                        held["std_data"])
     # a measured engine's parameters (the base model's); an engine discovery named on a clean
     # world is a false discovery, not the base model's error
     engine = row.get("engine") if "engine_impact" in row.get("measured_effects", ()) else None

@@ -212,6 +212,8 @@ def _nuisance_entry(fr: FitResult, name: str) -> dict:
     """result.json's entry of a nuisance parameter; marked not identified with the reason
     when the fit says so (a contact time stopped by its bound)."""
     entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name)}
+    if name in fr.held_measured:
+        entry["held"] = "where the recording measured it, not fitted (priors: where the fitted channels alone put it)"
     ok, reason = fr.identified.get(name, (True, ""))
     if not ok:
         entry.update(identified=False, reason=reason)
@@ -453,7 +455,11 @@ def fit_warnings(fr) -> list[str]:
            " the recording, set it (the model may be trading it against what it cannot explain)"
            for name, where in fr.at_bound.items()]
     for name, p in fr.pulls().items():
-        if p["conflict"]:
+        if p["conflict"] and p.get("held"):
+            out.append(f"{name} was held where the recording measured it ({p['prior']:.4g} +- {p['prior_std']:.2g}"
+                       f" {p['unit']}); the fitted channels alone would put it at {p['value']:.4g} +- {p['std']:.2g},"
+                       f" {p['pull']:+.1f} sigma away: the model and the recording disagree there")
+        elif p["conflict"]:
             out.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"
                        f" the fit ({p['prior']:.4g} +- {p['prior_std']:.2g} {p['unit']}): the model and the recording"
                        " disagree there")

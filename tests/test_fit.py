@@ -205,11 +205,14 @@ def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_m
                for w in fit_warnings(r))
 
 
-def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, paper_measurement, paper_fit):
+def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pulls_reported(
+        a4, paper_measurement, paper_fit):
     """A recording that measures first contact apart from the motion (load cells) gives t = 0
-    a sigma: the fit's contact time is then a measurement's, with its pull reported, and a
+    a sigma: the fit holds the contact there, a measured fact, not a knob, carries its sigma
+    into the other parameters, and reports where the fitted channels alone would put it; a
     contact 5 ms off against a 1 ms sigma is a conflict between model and recording. The
-    measured impact speed (one sigma off in the synthetic recording) is reported the same way."""
+    measured impact speed (one sigma off in the synthetic recording) is a prior, its pull
+    reported."""
     speed = paper_fit.pulls()["impact_speed"]
     assert speed["prior"] == pytest.approx(paper_measurement.impact_speed_mps)
     assert abs(speed["pull"]) < 3 and not speed["conflict"]
@@ -220,26 +223,36 @@ def test_measured_contact_and_speed_are_priors_whose_pulls_are_reported(a4, pape
                               contact_time_sigma=0.001)
     r = fit(off, a4, model_error=NONE)
     pull = r.pulls()["contact_time"]
-    assert pull["prior"] == 0.0 and pull["prior_std"] == 0.001
-    assert pull["conflict"] and pull["pull"] == pytest.approx(r.values["contact_time"] / 0.001)
-    assert 0.004 < r.values["contact_time"] < 0.0055  # the motion still decides (4.4 ms measured)
+    assert r.values["contact_time"] == pytest.approx(0.0, abs=1e-12) and r.std["contact_time"] == pytest.approx(0.001)
+    assert pull["held"] and pull["prior"] == 0.0 and pull["prior_std"] == 0.001
+    # the channels alone put it 4.47 ms late (measured); a start at the held contact alone stays there
+    assert 0.004 < pull["value"] < 0.0055
+    assert pull["conflict"] and pull["pull"] == pytest.approx(pull["value"] / np.hypot(0.001, pull["std"]))
     # the report and the console say it in the reader's units, the measurements first
     from identify.report.markdown import prior_lines
 
     lines = prior_lines(r.pulls())
-    assert lines[0].startswith("first contact: measured 0 +- 1 ms, fitted 4.") and "conflict" in lines[0]
-    assert lines[1].startswith("impact speed: measured") and "km/h" in lines[1] and "conflict" not in lines[1]
+    assert lines[0].startswith("first contact: measured 0 +- 1 ms, held there; the fitted channels alone 4.")
+    assert "conflict" in lines[0]
+    # held 5 ms early, the contact drags the speed with it (measured 57.65 against 56.59 +- 0.29 km/h)
+    assert lines[1].startswith("impact speed: measured 56.59") and "km/h" in lines[1] and "conflict" in lines[1]
     # and the result's warnings say it before any number
     from identify.identification import fit_warnings
 
     warned = fit_warnings(r)
-    assert len(warned) == 1 and warned[0].startswith("contact_time fitted at 0.004") and "disagree there" in warned[0]
+    assert len(warned) == 2 and warned[0].startswith("contact_time was held where the recording measured it (0 +- 0.001")
+    assert "alone would put it at 0.004" in warned[0] and "disagree there" in warned[0]
     assert fit_warnings(paper_fit) == []
     # a contact measured 4.7 ms after t = 0 (a film's sub-frame contact seen in the picture)
     # is where the prior sits: the same motion then agrees with it
     seen = fit(dataclasses.replace(off, contact_time_s=0.0047), a4, model_error=NONE)
     pull = seen.pulls()["contact_time"]
     assert pull["prior"] == 0.0047 and not pull["conflict"] and abs(pull["pull"]) < 1.0
+    assert seen.values["contact_time"] == pytest.approx(0.0047, abs=1e-12)
+    # the contact's sigma is carried into the parameters that depend on it
+    i, k = seen.names.index("contact_time"), seen.names.index("k_compression")
+    assert abs(seen.correlation[i, k]) > 0.5
+    assert seen.covariance[i, i] == pytest.approx(0.001**2)
 
 
 def test_a_channel_the_model_cannot_follow_no_longer_moves_what_the_others_measure(a4, paper_measurement):
@@ -252,8 +265,9 @@ def test_a_channel_the_model_cannot_follow_no_longer_moves_what_the_others_measu
     from identify.fitting.collision_fit import FitOptions
 
     m = with_heave_the_model_cannot_follow(paper_measurement)
-    plain = fit(m, a4, model_error=NONE, options=FitOptions(starts=1, misfit_weights=False))
-    weighted = fit(m, a4, model_error=NONE, options=FitOptions(starts=1))
+    # the seen contact a prior, not held where it was seen, so that the misfit can move it
+    plain = fit(m, a4, model_error=NONE, options=FitOptions(starts=1, misfit_weights=False, hold_measured_contact=False))
+    weighted = fit(m, a4, model_error=NONE, options=FitOptions(starts=1, hold_measured_contact=False))
     speed = 56.3 / 3.6
     # measured 2026-11-25: plain contact -1.00 ms, k -3.8 %, speed +1.37 %; weighted 0.36 ms, +0.05 %, +0.15 %
     assert abs(plain.values["contact_time"] - 0.0004) > 0.001 and abs(plain.speed / speed - 1) > 0.01

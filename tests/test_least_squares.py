@@ -10,6 +10,7 @@ import pytest
 
 from identify.fitting.least_squares import (
     channel_residuals,
+    held_at_measurement,
     integrated_autocorrelation_time,
     parameter_covariance,
     prior_residuals,
@@ -261,3 +262,41 @@ def test_correlated_noise_standard_deviations_cover_the_truth_68_percent_of_the_
     # widening: 22 and 28 %); a little under 68 % because tau estimated from 400 residuals
     # is biased low (the fitted line absorbs part of the slow noise)
     assert np.all((coverage > 0.60) & (coverage < 0.78)), coverage
+
+
+# --- a parameter held at a measured value -------------------------------------------------------
+
+def held_problem(rng, sigma_c):
+    """y = a0 + a1 t + b c + noise (sigma 0.05) with c also measured, c_m = c + N(0, sigma_c):
+    the line fitted with c held at c_m. Returns (design, b, y, c_m, fitted line, its residual rows)."""
+    n, sigma = 120, 0.05
+    t = np.linspace(0.0, 1.0, n)
+    a, b = np.column_stack([np.ones(n), t]), np.exp(-((t - 0.3) / 0.1) ** 2)  # c shows only in a bump
+    c_true = 0.4
+    y = a @ np.array([1.0, -2.0]) + b * c_true + rng.normal(0.0, sigma, n)
+    c_m = c_true + rng.normal(0.0, sigma_c)
+    line = np.linalg.lstsq(a, y - b * c_m, rcond=None)[0]
+    return a / sigma, b / sigma, y / sigma, c_m, line, (a @ line + b * c_m - y) / sigma
+
+
+def test_a_held_measurement_carries_its_sigma_into_the_others_as_monte_carlo_finds():
+    # independent reference: the spread of the line fitted with c held at its measurement, over
+    # many draws of the noise and of the measurement
+    sigma_c, rng = 0.3, np.random.default_rng(11)
+    fits, covs = [], []
+    for _ in range(4000):
+        a, b, _, c_m, line, r = held_problem(rng, sigma_c)
+        fits.append(line)
+    jac = np.column_stack([a, b])
+    unc = held_at_measurement(parameter_covariance(r, jac, np.ones(3), np.ones(3), {}, 10 * len(r)), 2, sigma_c)
+    spread = np.cov(np.array(fits).T)
+    np.testing.assert_allclose(unc.cov[:2, :2], spread, rtol=0.08, atol=1e-6)
+    assert unc.std[2] == pytest.approx(sigma_c)
+    # the data alone (no measurement error) would be far narrower: the held value's part matters
+    alone = parameter_covariance(r, a, np.ones(2), np.ones(2), {}, 10 * len(r))
+    assert unc.std[0] > 1.5 * alone.std[0]
+    # a held value known exactly leaves the conditional covariance: the line fitted with c fixed
+    exact = held_at_measurement(parameter_covariance(r, jac, np.ones(3), np.ones(3), {}, 10 * len(r)), 2, 0.0)
+    np.testing.assert_allclose(exact.cov[:2, :2], alone.cov, rtol=1e-8)
+    assert unc.dof == alone.dof
+

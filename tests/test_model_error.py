@@ -15,6 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 from benchmarks.accuracy import CALIBRATION_SEED_BASE, SEED_BASE  # noqa: E402
 from benchmarks.calibrate_model_error import errors_of, model_error_table, model_error_tables  # noqa: E402
+from identify.fitting.collision_fit import CONTACT_FROM_MOTION  # noqa: E402
 
 
 def test_calibrate_finds_the_spread_the_data_std_does_not_explain():
@@ -103,6 +104,12 @@ def test_calibration_rows_convert_to_fractions_of_the_truth_and_absolute_units()
     film = errors_of({**_row(CALIBRATION_SEED_BASE), "fit_contact_err_ms": 4.0, "contact_std_data_ms": 0.5,
                       "measured_effects": []})
     assert film["contact_time"] == pytest.approx((0.004, 0.0005))
+    assert CONTACT_FROM_MOTION not in film  # the contact was fitted, not held: no estimate of the channels' own
+    # held where the film saw it (4 ms late), the channels alone put it 1.5 ms later still, +- 0.3 ms
+    held = {"prior": 0.010, "prior_std": 0.0005, "value": 0.0115, "std": 0.002, "std_data": 0.0003, "held": True}
+    film = errors_of({**_row(CALIBRATION_SEED_BASE), "fit_contact_err_ms": 4.0, "contact_std_data_ms": 0.5,
+                      "measured_effects": [], "priors": {"contact_time": held}})
+    assert film[CONTACT_FROM_MOTION] == pytest.approx((0.0055, 0.0003))
     # an engine discovery on a film of a clean world is a false discovery, not the base model's error
     assert "engine_impact.engine_mass" not in film
 

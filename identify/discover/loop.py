@@ -71,7 +71,8 @@ from identify.fitting.residuals import ResidualAnalysis, analyse, channel_chi2, 
 # the engine's own channel by its misfit frees its parameters to absorb the cabin's (on
 # ISO-MME reference world 300, whose engine never reaches the barrier, the weighted two-body
 # fit beat the one-body fit on the cabin's channels by a BIC of 33, the unweighted one lost by 2).
-CANDIDATE_FIT = FitOptions(starts=1, max_steps=40, rtol=1e-5, atol=1e-5, misfit_weights=False)
+CANDIDATE_FIT = FitOptions(starts=1, max_steps=40, rtol=1e-5, atol=1e-5, misfit_weights=False,
+                           contact_from_motion=False)
 
 
 @dataclasses.dataclass(frozen=True)

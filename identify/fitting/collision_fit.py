@@ -39,6 +39,7 @@ from identify.fitting.model_error import table as model_error_table
 from identify.fitting.least_squares import (
     channel_residuals,
     channel_variance_factors,
+    held_at_measurement,
     parameter_covariance,
     prior_residuals,
     weighted_offset,
@@ -73,6 +74,10 @@ MISFIT_ROUNDS = 3
 WEIGHTED_SOLVES = 5
 BEFORE_CONTACT = " before contact"  # a channel's weighting group of samples before the measured first contact
 MIN_BEFORE_CONTACT = 5  # fewer samples before contact stay in the channel's one group
+# the model-error table's entry for the contact the fitted channels alone put (s): what a
+# held measured contact is compared with (``FitResult.pulls``)
+CONTACT_FROM_MOTION = "contact_time_from_motion"
+MOTION_CONTACT_STARTS_S = (0.0, -0.003, 0.003)  # where that estimate starts, from the held contact (s)
 
 # Random starting points are drawn from these physical ranges (log-uniform for "log").
 START_RANGES = {
@@ -102,6 +107,13 @@ class FitOptions:
         (``mu_face``); off, it is V-SIM's 0. Off by default: with it, discovery's rules (set on
         the frictionless model, whose heave misfit hid the rest) named physics on 15 of 19 clean
         calibration films (README, "How the fit works").
+    hold_measured_contact : a first contact the recording measured apart from the fitted
+        channels (seen in the film, the load cells' onset) is held where it was measured, not
+        fitted: a measured fact, not a knob (:func:`fit`). Off, it is a prior of the fit.
+    contact_from_motion : with a held contact, fit once more from the optimum with the contact
+        free and no prior, to report where the fitted channels alone put it
+        (``FitResult.held_measured``, its pull in ``FitResult.pulls``); discovery's candidate
+        fits, which do not read the nuisances' pulls, skip it.
     """
 
     starts: int = 5
@@ -112,6 +124,8 @@ class FitOptions:
     solver: Solver = Solver()
     misfit_weights: bool = True
     face_friction: bool = False
+    hold_measured_contact: bool = True
+    contact_from_motion: bool = True
 
 
 @dataclasses.dataclass
@@ -140,6 +154,11 @@ class FitResult:
     model_choice : name -> how far the mechanisms discovery added moved a base parameter
         from the base model's fit (its unit), counted in ``std_model``
         (``identify.discover.loop.with_model_choice``); empty without discoveries.
+    held_measured : name -> {measured, sigma[, model, model_std_data, model_std]} for a measured
+        quantity held where it was measured (the contact seen: ``FitOptions.hold_measured_contact``),
+        in ``values`` at the measured value with its sigma carried into the others' covariance;
+        model: where the fitted channels alone put it, model_std that estimate's std with the
+        model's own error, model_std_data without (``FitOptions.contact_from_motion``).
     converged : the best start converged; starts_at_best : how many starts reached it;
     other_minima : costs of distinct worse minima found.
     params, speed, contact_time : the fitted model (sim.Params, m/s, s).
@@ -177,6 +196,7 @@ class FitResult:
     misfit: dict[str, float] = dataclasses.field(default_factory=dict)
     sigma_widened: dict[str, float] = dataclasses.field(default_factory=dict)
     model_choice: dict[str, float] = dataclasses.field(default_factory=dict)
+    held_measured: dict[str, dict] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -189,8 +209,18 @@ class FitResult:
     def pulls(self) -> dict[str, dict]:
         """name -> {prior, prior_std, value, std, unit, pull, conflict} for each fitted quantity
         that had a prior: pull = (fitted - prior) / prior sigma; beyond ``PULL_CONFLICT``
-        sigma the model and the recording disagree with the prior knowledge."""
+        sigma the model and the recording disagree with the prior knowledge. A measured
+        quantity the fit held (``held_measured``: the contact seen) has ``held`` True, its value
+        where the fitted channels alone would put it, std that estimate's (std_data without the
+        model's own error), and pull their difference over both sigmas in quadrature."""
         out = {}
+        for name, h in self.held_measured.items():
+            if "model" not in h:  # not compared (``FitOptions.contact_from_motion``)
+                continue
+            pull = (h["model"] - h["measured"]) / math.hypot(h["sigma"], h["model_std"])
+            out[name] = {"prior": h["measured"], "prior_std": h["sigma"], "value": h["model"], "std": h["model_std"],
+                         "std_data": h["model_std_data"], "unit": self.units.get(name, ""), "pull": pull,
+                         "conflict": bool(abs(pull) > self.PULL_CONFLICT), "held": True}
         for name, (mu, sigma) in self.priors.items():
             if name in self.values:
                 pull = (self.values[name] - mu) / sigma
@@ -340,6 +370,32 @@ def approach_tau_floor(groups) -> dict[str, str]:
     return {g: g[: -len(BEFORE_CONTACT)] for g in groups if g.endswith(BEFORE_CONTACT)}
 
 
+def _contact_from_motion(spec, channels, n_out, options, data, u, i_c: int):
+    """The fit continued from the held fit's optimum ``u`` with the contact (``spec[i_c]``)
+    free and no prior on it (``data``: its mask 1, its prior weight 0, the fit's weights), from
+    the held contact and ``MOTION_CONTACT_STARTS_S`` either side: the channels may have a
+    second basin some milliseconds away (a contact held 5 ms early was a local optimum of its
+    own, chi-square 17 % above the true one). Returns (u, cost) of the lowest."""
+    seen = float(spec[i_c].to_physical(u[i_c]))
+    best = (u, np.inf)
+    for shift in MOTION_CONTACT_STARTS_S:
+        u0 = u.at[i_c].set(spec[i_c].to_unconstrained(seen + shift))
+        u1, cost, _ = _solve_jit(spec, channels, n_out, options, data, u0)
+        if float(cost) < best[1]:
+            best = (u1, float(cost))
+    return best
+
+
+def widened(w: np.ndarray, groups: dict, factors: dict) -> np.ndarray:
+    """The weights ``w`` ((channels, n) of 1/sigma, as the fit stacks them) with each group's
+    rows (``groups``: :func:`weighting_groups`) divided by its factor (``factors``: group ->
+    sigma multiplier)."""
+    scale = np.ones(w.size)
+    for g, rows in groups.items():
+        scale[rows] = factors[g]
+    return np.asarray(w) / scale.reshape(np.shape(w))
+
+
 def _weighted_by_misfit(spec, channels, n_out, options, data, u, groups: dict, n_fitted: int):
     """The fit continued from its optimum ``u`` with each group's sigma (``groups``:
     :func:`weighting_groups`) multiplied by sqrt(tau * max(1, reduced chi-square)) of that
@@ -357,10 +413,7 @@ def _weighted_by_misfit(spec, channels, n_out, options, data, u, groups: dict, n
         new = {g: math.sqrt(tau[g] * misfit[g]) for g in groups}
         if np.allclose([new[g] for g in groups], [widen[g] for g in groups], rtol=0.1):
             break
-        scale = np.ones(w.size)
-        for g, rows in groups.items():
-            scale[rows] = new[g]
-        trial, u1 = {**data, "w": jnp.asarray(w / scale.reshape(w.shape))}, u
+        trial, u1 = {**data, "w": jnp.asarray(widened(w, groups, new))}, u
         for _ in range(WEIGHTED_SOLVES):  # continued while the step limit stopped it
             u1, cost, ok = _solve_jit(spec, channels, n_out, options, trial, u1)
             if bool(ok) or not np.isfinite(float(cost)):
@@ -459,6 +512,16 @@ def fit(
     unknown = sorted(set(held) - {p.name for p in free})
     if unknown:
         raise ValueError(f"held parameter {unknown[0]!r} is not in free")
+    # a first contact measured apart from the fitted channels (seen in the film, the load
+    # cells' onset) is a measurement, not a knob: held where it was measured, its sigma carried
+    # into the others' covariance (least_squares.held_at_measurement). As a prior it was
+    # outweighed by the motion's thousands of samples: on the 10 clean scored films whose seen
+    # contact was within 0.2 ms of the truth, the fit moved it 0.41 ms later on average (up to
+    # 1.57 ms) and k_compression followed it, 5 % per ms.
+    contact_held = bool(options.hold_measured_contact and measurement.contact_time_sigma
+                        and any(p.name == "contact_time" for p in free) and "contact_time" not in held)
+    if contact_held:
+        held["contact_time"] = float(measurement.contact_time_s)
     init = {
         **{n: float(getattr(template, n)) for n in ("k_compression", "k_restitution", "restitution", "dz_contact")},
         "impact_speed": speed_guess,
@@ -496,7 +559,8 @@ def fit(
 
     # the number of starts, their seed and the reweighting do not change the compiled solve:
     # fits that differ only in those share it
-    compiled = dataclasses.replace(options, starts=1, seed=0, misfit_weights=False, face_friction=False)
+    compiled = dataclasses.replace(options, starts=1, seed=0, misfit_weights=False, face_friction=False,
+                                   hold_measured_contact=True, contact_from_motion=True)
     runs = []
     for k, u0 in enumerate(_starting_points(free, init, options, held)):
         if progress is not None:
@@ -521,7 +585,14 @@ def fit(
         if progress is not None:
             progress("fit: again, each channel weighted by its own misfit")
         u, widen, finished = _weighted_by_misfit(free, channels, n_out, compiled, data, u, groups, len(free) - len(held))
+        fit_weights = widened(w, groups, widen)
     else:
+        fit_weights = w
+        finished = _finish_jit(free, channels, n_out, compiled, data, u)
+    if contact_held:  # the residuals' dependence on the held contact, to carry its sigma through
+        i_c = [p.name for p in free].index("contact_time")
+        u = u.at[i_c].set(free[i_c].to_unconstrained(held.pop("contact_time")))
+        data["mask"] = data["mask"].at[i_c].set(1.0)
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     # residuals and Jacobian in the recording's own sigmas: the covariance widens each channel by its misfit there
     r, jac_u, dvalue_du, traj, preds = finished
@@ -532,6 +603,27 @@ def fit(
     n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
     unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), groups, n_res,
                                per_channel=options.misfit_weights, tau_at_least=approach_tau_floor(groups))
+    held_measured = {}
+    error_table = model_error or model_error_table(kind_of(measurement))
+    if contact_held:
+        k = [p.name for p in free].index("contact_time")
+        seen, sigma = float(measurement.contact_time_s), float(measurement.contact_time_sigma)
+        held_measured["contact_time"] = {"measured": seen, "sigma": sigma}
+        if options.contact_from_motion:
+            # where the fitted channels alone put the contact: the fit continued with it free and
+            # no prior, in the fit's weights, its std theirs and the model's own error of that
+            # estimate (calibrated apart: ``CONTACT_FROM_MOTION``)
+            u_m, cost_m = _contact_from_motion(spec_all, channels, n_out, compiled, {**data, "w": jnp.asarray(fit_weights)},
+                                               u, i_c)
+            if np.isfinite(cost_m):
+                r_m, jac_m, dvalue_m, _, _ = (np.asarray(a) for a in _finish_jit(spec_all, channels, n_out, compiled, data, u_m))
+                unc_m = parameter_covariance(r_m, jac_m[:, fitted], dvalue_m[fitted], np.array([p.typical for p in free]),
+                                             groups, n_res, per_channel=options.misfit_weights,
+                                             tau_at_least=approach_tau_floor(groups))
+                held_measured["contact_time"].update(
+                    model=float(spec_all[i_c].to_physical(u_m[i_c])), model_std_data=float(unc_m.std[k]),
+                    model_std=math.hypot(float(unc_m.std[k]), error_table.std(CONTACT_FROM_MOTION, 0.0)))
+        unc = held_at_measurement(unc, k, sigma)
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}
@@ -555,7 +647,7 @@ def fit(
 
     names = tuple(p.name for p in free)
     std_data = dict(zip(names, map(float, unc.std)))
-    std, std_model = (model_error or model_error_table(kind_of(measurement))).covering(values, std_data)
+    std, std_model = error_table.covering(values, std_data)
     result = FitResult(
         names=names,
         units={p.name: p.unit for p in free},
@@ -584,6 +676,7 @@ def fit(
         misfit=unc.misfit,
         sigma_widened={g: float(f) for g, f in widen.items() if f > 1.0},
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
+        held_measured=held_measured,
     )
     result.identified = {**assess_identifiability(result, channels),
                          **log_scale_identifiability(free, result.values, result.std, result.std_data, result.std_model)}

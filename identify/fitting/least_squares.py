@@ -154,3 +154,25 @@ def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res
     std = np.sqrt(np.diag(cov))  # > 0: every eigenvalue was floored above 0
     corr = cov / np.outer(std, std)
     return Uncertainty(cov=cov, std=std, corr=corr, chi2=chi2, dof=dof, tau=tau, misfit=misfit, scale=scale)
+
+
+def held_at_measurement(unc: Uncertainty, index: int, sigma: float) -> Uncertainty:
+    """The uncertainty of a fit that held parameter ``index`` at a measured value of standard
+    deviation ``sigma`` (its unit) instead of fitting it, from ``unc``: the covariance with it
+    fitted by the residuals alone (its column in the Jacobian, no prior row for it), taken at
+    the held fit's optimum.
+
+    The others were fitted at the held value: their covariance is the conditional one,
+    C_oo - C_oi C_io / C_ii, plus the held value's own error carried through their optimum's
+    dependence on it, g g^T sigma^2 with g = C_oi / C_ii (the others' shift per unit of the
+    held value). The held parameter keeps ``sigma``; its covariance with the others is
+    g sigma^2. One degree of freedom more than ``unc`` (one parameter fewer fitted)."""
+    c = np.asarray(unc.cov, dtype=float)
+    g = c[:, index] / c[index, index]
+    cov = c - np.outer(c[:, index], c[:, index]) / c[index, index] + np.outer(g, g) * sigma**2
+    cov[index, :] = cov[:, index] = g * sigma**2
+    cov[index, index] = sigma**2
+    std = np.sqrt(np.diag(cov))
+    scale = np.outer(std, std)  # a value held exactly (sigma 0) is correlated with nothing
+    corr = np.divide(cov, scale, out=np.eye(len(std)), where=scale > 0)
+    return dataclasses.replace(unc, cov=cov, std=std, corr=corr, dof=unc.dof + 1)

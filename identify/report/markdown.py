@@ -46,7 +46,8 @@ def prior_lines(priors: dict) -> list[str]:
     """One line per quantity known before the fit (``result.json``'s ``priors``): what was
     known, what the fit made of it and the pull (fitted - known) / sigma; the recording's
     own measurements (speed, contact) first, then the other priors (an engine's mass from
-    the vehicle file)."""
+    the vehicle file). A measurement the fit held (the contact seen) is compared with where
+    the fitted channels alone would put it."""
     out = []
     for name in sorted(priors, key=lambda n: (n not in MEASURED, n)):
         p = priors[name]
@@ -54,7 +55,8 @@ def prior_lines(priors: dict) -> list[str]:
         u = f" {unit}" if unit else ""
         source = "measured" if name in MEASURED else "prior"
         flag = " **conflict: model and recording disagree**" if p["conflict"] else ""
-        out.append(f"{label}: {source} {p['prior'] * scale:.4g} +- {p['prior_std'] * scale:.2g}{u}, fitted"
+        fitted = "held there; the fitted channels alone" if p.get("held") else "fitted"
+        out.append(f"{label}: {source} {p['prior'] * scale:.4g} +- {p['prior_std'] * scale:.2g}{u}, {fitted}"
                    f" {p['value'] * scale:.4g} +- {p['std'] * scale:.2g}{u} (pull {p['pull']:+.1f} sigma){flag}")
     return out
 
