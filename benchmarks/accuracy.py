@@ -153,7 +153,7 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
                          for r in doc.get("discovery_rounds", [])]
         row["rms_mm"] = 1e3 * doc["fit"]["rms_m"]
         # what was known before the fit (the contact seen, the approach's speed), and how far the fit pulled it
-        row["priors"] = {name: {k: p.get(k) for k in ("prior", "prior_std", "value", "std", "std_data", "pull", "held")}
+        row["priors"] = {name: {k: p.get(k) for k in ("prior", "prior_std", "value", "std", "std_data", "pull", "held", "held_at")}
                          for name, p in doc.get("priors", {}).items()}
     return row
 

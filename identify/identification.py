@@ -213,7 +213,8 @@ def _nuisance_entry(fr: FitResult, name: str) -> dict:
     when the fit says so (a contact time stopped by its bound)."""
     entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name)}
     if name in fr.held_measured:
-        entry["held"] = "where the recording measured it, not fitted (priors: where the fitted channels alone put it)"
+        entry["held"] = ("not fitted: held where the recording measured it, combined with where the fitted channels"
+                         " alone put it (priors)")
     ok, reason = fr.identified.get(name, (True, ""))
     if not ok:
         entry.update(identified=False, reason=reason)
@@ -405,10 +406,14 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
     from identify.discover.loop import CANDIDATE_FIT, discover as discover_missing, fit_base, with_model_choice
 
     # discovery's base fit is run as its candidates are (one compile); without discovery it is the reported fit
-    base_options = (dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver)
+    base_options = (dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver,
+                                        contact_from_motion=options.contact_from_motion)
                     if discover else options)
     say("fitting the collision model (the first run compiles it: ~20 s)")
     base = fit_base(rec.measurement, veh, free=free, options=base_options, speed_mps=speed_mps, progress=say)
+    # every later fit holds the contact where the base fit did: the measured one combined with the base model's
+    rec = _with_contact_held_as(rec, base)
+    base_options = dataclasses.replace(base_options, contact_from_motion=False)
     found = None
     if discover:
         say(f"base model: x RMS {base.rms_m * 1e3:.2f} mm; looking for physics it left out")
@@ -417,6 +422,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         say(f"discovery: {status}")
     else:
         fr, discoveries, status = base, [], "discovery of missing physics was switched off (--no-discover)"
+    fr = dataclasses.replace(fr, held_measured=base.held_measured)  # what the measured contact was combined with
     one_body = _cabin_alone(rec, veh, free, base_options, speed_mps, say)
     engine_doubt, disputed = second_body_doubts(fr, one_body)
     if engine_doubt:  # the cabin prefers the base model's engine: the choice between the two is no measurement
@@ -456,9 +462,10 @@ def fit_warnings(fr) -> list[str]:
            for name, where in fr.at_bound.items()]
     for name, p in fr.pulls().items():
         if p["conflict"] and p.get("held"):
-            out.append(f"{name} was held where the recording measured it ({p['prior']:.4g} +- {p['prior_std']:.2g}"
-                       f" {p['unit']}); the fitted channels alone would put it at {p['value']:.4g} +- {p['std']:.2g},"
-                       f" {p['pull']:+.1f} sigma away: the model and the recording disagree there")
+            out.append(f"{name}: the fitted channels alone put it at {p['value']:.4g} +- {p['std']:.2g} {p['unit']},"
+                       f" {p['pull']:+.1f} sigma from where the recording measured it ({p['prior']:.4g} +-"
+                       f" {p['prior_std']:.2g}): the model and the recording disagree there; held at the two combined,"
+                       f" {p['held_at']:.4g} +- {p['held_std']:.2g}")
         elif p["conflict"]:
             out.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"
                        f" the fit ({p['prior']:.4g} +- {p['prior_std']:.2g} {p['unit']}): the model and the recording"
@@ -537,6 +544,18 @@ def second_body_doubts(fr, one_body) -> tuple[str, dict[str, str]]:
                 disputed[name] = ("not identified: the cabin's motion does not bear out the engine as a second body,"
                                   " so its fitted values describe the model's compromise, not the car")
     return warning, disputed
+
+
+def _with_contact_held_as(rec, fr):
+    """``rec`` with its measured first contact replaced by where fit ``fr`` held it, the
+    measurement combined with where the fitted channels alone put it
+    (``FitResult.held_measured``), so that the fits after it hold it there too; ``rec`` as it
+    was when ``fr`` did not combine them."""
+    contact = fr.held_measured.get("contact_time", {})
+    if "held_at" not in contact:
+        return rec
+    m = dataclasses.replace(rec.measurement, contact_time_s=contact["held_at"], contact_time_sigma=contact["held_std"])
+    return dataclasses.replace(rec, measurement=m)
 
 
 def _cabin_alone(rec, veh, free, options, speed_mps, say):

@@ -110,6 +110,7 @@ class FakeFit:
     units: dict = dataclasses.field(default_factory=dict)
     chi2: float = 0.0
     std_data: dict = dataclasses.field(default_factory=dict)
+    held_measured: dict = dataclasses.field(default_factory=dict)
     PULL_CONFLICT = FitResult.PULL_CONFLICT
     pulls = FitResult.pulls
 

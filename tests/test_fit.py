@@ -207,12 +207,15 @@ def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_m
 
 def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pulls_reported(
         a4, paper_measurement, paper_fit):
+    from identify.fitting.collision_fit import FitOptions
+
     """A recording that measures first contact apart from the motion (load cells) gives t = 0
-    a sigma: the fit holds the contact there, a measured fact, not a knob, carries its sigma
-    into the other parameters, and reports where the fitted channels alone would put it; a
-    contact 5 ms off against a 1 ms sigma is a conflict between model and recording. The
-    measured impact speed (one sigma off in the synthetic recording) is a prior, its pull
-    reported."""
+    a sigma: the fit does not turn it as a knob, it holds it where the measurement and the
+    fitted channels' own estimate combine (inverse-variance weights; here without the model's
+    own error, so the channels weigh more), carries its sigma into the other parameters, and
+    reports where the channels alone put it; a contact 5 ms off against a 1 ms sigma is a
+    conflict between model and recording. The measured impact speed (one sigma off in the
+    synthetic recording) is a prior, its pull reported."""
     speed = paper_fit.pulls()["impact_speed"]
     assert speed["prior"] == pytest.approx(paper_measurement.impact_speed_mps)
     assert abs(speed["pull"]) < 3 and not speed["conflict"]
@@ -221,38 +224,54 @@ def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pull
     # said to put contact at t = 0 +- 1 ms
     off = dataclasses.replace(synthetic_measurement(a4, named_params("paper_identified"), contact_time=0.005),
                               contact_time_sigma=0.001)
-    r = fit(off, a4, model_error=NONE)
+    # the model's own error only where the channels' contact can be weighed against the measured one
+    # (a film's table has it), small here, so the channels weigh more
+    from identify.fitting.collision_fit import CONTACT_FROM_MOTION
+    from identify.fitting.model_error import ModelError
+
+    contact_only = ModelError(absolute={CONTACT_FROM_MOTION: 1e-5})
+    r = fit(off, a4, model_error=contact_only)
     pull = r.pulls()["contact_time"]
-    assert r.values["contact_time"] == pytest.approx(0.0, abs=1e-12) and r.std["contact_time"] == pytest.approx(0.001)
     assert pull["held"] and pull["prior"] == 0.0 and pull["prior_std"] == 0.001
-    # the channels alone put it 4.47 ms late (measured); a start at the held contact alone stays there
+    # the channels alone put it 4.47 ms late (measured); a start at the measured contact alone stays there
     assert 0.004 < pull["value"] < 0.0055
     assert pull["conflict"] and pull["pull"] == pytest.approx(pull["value"] / np.hypot(0.001, pull["std"]))
+    assert pull["std"] == pytest.approx(np.hypot(pull["std_data"], 1e-5))
+    # held where the two combine, weighted by their inverse variances
+    w_seen, w_model = 0.001**-2, pull["std"] ** -2
+    assert pull["held_at"] == pytest.approx(pull["value"] * w_model / (w_seen + w_model))
+    assert r.values["contact_time"] == pytest.approx(pull["held_at"], abs=1e-9)
+    assert r.std["contact_time"] == pytest.approx((w_seen + w_model) ** -0.5)
     # the report and the console say it in the reader's units, the measurements first
     from identify.report.markdown import prior_lines
 
     lines = prior_lines(r.pulls())
-    assert lines[0].startswith("first contact: measured 0 +- 1 ms, held there; the fitted channels alone 4.")
-    assert "conflict" in lines[0]
-    # held 5 ms early, the contact drags the speed with it (measured 57.65 against 56.59 +- 0.29 km/h)
-    assert lines[1].startswith("impact speed: measured 56.59") and "km/h" in lines[1] and "conflict" in lines[1]
+    assert lines[0].startswith("first contact: measured 0 +- 1 ms, the fitted channels alone 4.")
+    assert "held at the two combined, 3." in lines[0] and "conflict" in lines[0]
+    assert lines[1].startswith("impact speed: measured") and "km/h" in lines[1] and "conflict" not in lines[1]
     # and the result's warnings say it before any number
     from identify.identification import fit_warnings
 
     warned = fit_warnings(r)
-    assert len(warned) == 2 and warned[0].startswith("contact_time was held where the recording measured it (0 +- 0.001")
-    assert "alone would put it at 0.004" in warned[0] and "disagree there" in warned[0]
+    assert len(warned) == 1 and warned[0].startswith("contact_time: the fitted channels alone put it at 0.004")
+    assert "from where the recording measured it (0 +- 0.001)" in warned[0] and "disagree there" in warned[0]
+    assert "held at the two combined, 0.003" in warned[0]
     assert fit_warnings(paper_fit) == []
     # a contact measured 4.7 ms after t = 0 (a film's sub-frame contact seen in the picture)
     # is where the prior sits: the same motion then agrees with it
-    seen = fit(dataclasses.replace(off, contact_time_s=0.0047), a4, model_error=NONE)
+    # a table that cannot weigh the channels' contact (a sensor recording's): the measured contact
+    # stays a prior, which the motion outweighs (4.26 ms measured)
+    prior = fit(off, a4, model_error=NONE, options=FitOptions(starts=1)).pulls()["contact_time"]
+    assert "held" not in prior and 0.004 < prior["value"] < 0.0045 and prior["conflict"]
+    seen = fit(dataclasses.replace(off, contact_time_s=0.0047), a4, model_error=contact_only)
     pull = seen.pulls()["contact_time"]
     assert pull["prior"] == 0.0047 and not pull["conflict"] and abs(pull["pull"]) < 1.0
-    assert seen.values["contact_time"] == pytest.approx(0.0047, abs=1e-12)
+    assert seen.values["contact_time"] == pytest.approx(seen.pulls()["contact_time"]["held_at"], abs=1e-9)
+    assert abs(seen.values["contact_time"] - 0.0047) < 0.0001
     # the contact's sigma is carried into the parameters that depend on it
     i, k = seen.names.index("contact_time"), seen.names.index("k_compression")
     assert abs(seen.correlation[i, k]) > 0.5
-    assert seen.covariance[i, i] == pytest.approx(0.001**2)
+    assert seen.covariance[i, i] == pytest.approx(seen.pulls()["contact_time"]["held_std"] ** 2)
 
 
 def test_a_channel_the_model_cannot_follow_no_longer_moves_what_the_others_measure(a4, paper_measurement):

@@ -78,6 +78,7 @@ MIN_BEFORE_CONTACT = 5  # fewer samples before contact stay in the channel's one
 # held measured contact is compared with (``FitResult.pulls``)
 CONTACT_FROM_MOTION = "contact_time_from_motion"
 MOTION_CONTACT_STARTS_S = (0.0, -0.003, 0.003)  # where that estimate starts, from the held contact (s)
+HOLD_MOVED = 0.05  # the combined contact this many measurement sigmas from the measured one: the fit continued there
 
 # Random starting points are drawn from these physical ranges (log-uniform for "log").
 START_RANGES = {
@@ -108,12 +109,16 @@ class FitOptions:
         the frictionless model, whose heave misfit hid the rest) named physics on 15 of 19 clean
         calibration films (README, "How the fit works").
     hold_measured_contact : a first contact the recording measured apart from the fitted
-        channels (seen in the film, the load cells' onset) is held where it was measured, not
-        fitted: a measured fact, not a knob (:func:`fit`). Off, it is a prior of the fit.
-    contact_from_motion : with a held contact, fit once more from the optimum with the contact
-        free and no prior, to report where the fitted channels alone put it
-        (``FitResult.held_measured``, its pull in ``FitResult.pulls``); discovery's candidate
-        fits, which do not read the nuisances' pulls, skip it.
+        channels (seen in the film, the load cells' onset) is held, not fitted: a measured
+        fact, not a knob (:func:`fit`), where the model-error table knows how far the
+        channels' own contact can be off (``CONTACT_FROM_MOTION``: a film's). Otherwise, and
+        off, it is a prior of the fit.
+    contact_from_motion : with a held contact, fit on from the optimum with the contact free
+        and no prior, to find where the fitted channels alone put it, and hold it where the
+        two combined put it (inverse-variance mean, the channels' estimate with the model's
+        own error, ``CONTACT_FROM_MOTION``), reported in ``FitResult.held_measured`` and
+        ``FitResult.pulls``; off, it is held where it was measured (discovery's candidate fits,
+        which hold it where the base fit did).
     """
 
     starts: int = 5
@@ -154,11 +159,13 @@ class FitResult:
     model_choice : name -> how far the mechanisms discovery added moved a base parameter
         from the base model's fit (its unit), counted in ``std_model``
         (``identify.discover.loop.with_model_choice``); empty without discoveries.
-    held_measured : name -> {measured, sigma[, model, model_std_data, model_std]} for a measured
-        quantity held where it was measured (the contact seen: ``FitOptions.hold_measured_contact``),
-        in ``values`` at the measured value with its sigma carried into the others' covariance;
-        model: where the fitted channels alone put it, model_std that estimate's std with the
-        model's own error, model_std_data without (``FitOptions.contact_from_motion``).
+    held_measured : name -> {measured, sigma[, model, model_std_data, model_std, held_at, held_std]}
+        for a measured quantity the fit held, not fitted (the contact seen:
+        ``FitOptions.hold_measured_contact``), in ``values`` where it was held with its sigma
+        carried into the others' covariance; model: where the fitted channels alone put it,
+        model_std that estimate's std with the model's own error, model_std_data without;
+        held_at, held_std: the measurement and that estimate combined, where it was held
+        (``FitOptions.contact_from_motion``; without, at the measurement).
     converged : the best start converged; starts_at_best : how many starts reached it;
     other_minima : costs of distinct worse minima found.
     params, speed, contact_time : the fitted model (sim.Params, m/s, s).
@@ -212,7 +219,8 @@ class FitResult:
         sigma the model and the recording disagree with the prior knowledge. A measured
         quantity the fit held (``held_measured``: the contact seen) has ``held`` True, its value
         where the fitted channels alone would put it, std that estimate's (std_data without the
-        model's own error), and pull their difference over both sigmas in quadrature."""
+        model's own error), pull their difference over both sigmas in quadrature, and held_at,
+        held_std where the fit held it (the two combined)."""
         out = {}
         for name, h in self.held_measured.items():
             if "model" not in h:  # not compared (``FitOptions.contact_from_motion``)
@@ -220,7 +228,8 @@ class FitResult:
             pull = (h["model"] - h["measured"]) / math.hypot(h["sigma"], h["model_std"])
             out[name] = {"prior": h["measured"], "prior_std": h["sigma"], "value": h["model"], "std": h["model_std"],
                          "std_data": h["model_std_data"], "unit": self.units.get(name, ""), "pull": pull,
-                         "conflict": bool(abs(pull) > self.PULL_CONFLICT), "held": True}
+                         "conflict": bool(abs(pull) > self.PULL_CONFLICT), "held": True,
+                         "held_at": h["held_at"], "held_std": h["held_std"]}
         for name, (mu, sigma) in self.priors.items():
             if name in self.values:
                 pull = (self.values[name] - mu) / sigma
@@ -386,6 +395,45 @@ def _contact_from_motion(spec, channels, n_out, options, data, u, i_c: int):
     return best
 
 
+def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, i_c: int, held: dict, sigma: float,
+                              groups, n_res: int, per_channel: bool, model_std: float):
+    """The contact measured apart from the fitted channels (``held["contact_time"]``, s, of
+    standard deviation ``sigma``) combined with where the fitted channels
+    alone put it (:func:`_contact_from_motion`, its std the data's and ``model_std``, the
+    model's own error of that estimate, in quadrature): the inverse-variance mean, where the
+    fit is then held (``held`` updated, the fit continued from ``u`` in ``weights``). A film's
+    contact seen to 0.5 ms against the motion's 2 ms stays near where it was seen; load cells'
+    onset known to 3 ms moves to the motion's.
+
+    ``data``: the fit's, its contact's mask 1 (free) and no prior on it. Returns (u, the
+    combined sigma, {model, model_std_data, model_std, held_at, held_std}); without a finite
+    estimate from the channels, (u, the measurement's sigma, {})."""
+    seen = held["contact_time"]
+    u_m, cost = _contact_from_motion(spec, channels, n_out, options, {**data, "w": jnp.asarray(weights)}, u, i_c)
+    if not np.isfinite(cost):
+        return u, sigma, {}
+    fitted = [i for i, p in enumerate(spec) if p.name not in held or i == i_c]
+    r, jac, dvalue, _, _ = (np.asarray(a) for a in _finish_jit(spec, channels, n_out, options, data, u_m))
+    unc = parameter_covariance(r, jac[:, fitted], dvalue[fitted], np.array([spec[i].typical for i in fitted]), groups,
+                               n_res, per_channel=per_channel, tau_at_least=approach_tau_floor(groups))
+    model, std_data = float(spec[i_c].to_physical(u_m[i_c])), float(unc.std[fitted.index(i_c)])
+    std = math.hypot(std_data, model_std)
+    w_seen, w_model = sigma**-2, std**-2
+    at, at_std = (seen * w_seen + model * w_model) / (w_seen + w_model), (w_seen + w_model) ** -0.5
+    if abs(at - seen) > HOLD_MOVED * sigma:  # continued from the held optimum with the contact where it is now held
+        held["contact_time"] = at
+        trial = {**data, "w": jnp.asarray(weights), "mask": data["mask"].at[i_c].set(0.0),
+                 "held": data["held"].at[i_c].set(at)}
+        for _ in range(WEIGHTED_SOLVES):  # continued while the step limit stopped it
+            u1, cost1, ok = _solve_jit(spec, channels, n_out, options, trial, u)
+            if not np.isfinite(float(cost1)):
+                break
+            u = u1
+            if bool(ok):
+                break
+    return u, at_std, {"model": model, "model_std_data": std_data, "model_std": std, "held_at": at, "held_std": at_std}
+
+
 def widened(w: np.ndarray, groups: dict, factors: dict) -> np.ndarray:
     """The weights ``w`` ((channels, n) of 1/sigma, as the fit stacks them) with each group's
     rows (``groups``: :func:`weighting_groups`) divided by its factor (``factors``: group ->
@@ -513,12 +561,18 @@ def fit(
     if unknown:
         raise ValueError(f"held parameter {unknown[0]!r} is not in free")
     # a first contact measured apart from the fitted channels (seen in the film, the load
-    # cells' onset) is a measurement, not a knob: held where it was measured, its sigma carried
-    # into the others' covariance (least_squares.held_at_measurement). As a prior it was
-    # outweighed by the motion's thousands of samples: on the 10 clean scored films whose seen
-    # contact was within 0.2 ms of the truth, the fit moved it 0.41 ms later on average (up to
-    # 1.57 ms) and k_compression followed it, 5 % per ms.
+    # cells' onset) is a measurement, not a knob: held, not fitted, its sigma carried into the
+    # others' covariance (least_squares.held_at_measurement). As a prior it was outweighed by
+    # the motion's thousands of samples: on the 10 clean scored films whose seen contact was
+    # within 0.2 ms of the truth, the fit moved it 0.41 ms later on average (up to 1.57 ms) and
+    # k_compression followed it, 5 % per ms. Held only where the model-error table knows how
+    # far the channels' own contact can be off (CONTACT_FROM_MOTION: a film's): without it the
+    # two cannot be weighed, and the measurement stays a prior (load cells' onset, +- 3 ms on
+    # NHTSA 10146: held there, the multi-start search fell into another basin, x RMS 13.9 mm
+    # against 7.8, and discovery named a progressive stiffness)
+    error_table = model_error or model_error_table(kind_of(measurement))
     contact_held = bool(options.hold_measured_contact and measurement.contact_time_sigma
+                        and error_table.std(CONTACT_FROM_MOTION, 0.0) > 0
                         and any(p.name == "contact_time" for p in free) and "contact_time" not in held)
     if contact_held:
         held["contact_time"] = float(measurement.contact_time_s)
@@ -589,10 +643,19 @@ def fit(
     else:
         fit_weights = w
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
-    if contact_held:  # the residuals' dependence on the held contact, to carry its sigma through
+    held_measured = {}
+    n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
+    if contact_held:
         i_c = [p.name for p in free].index("contact_time")
+        sigma = float(measurement.contact_time_sigma)
+        held_measured["contact_time"] = {"measured": held["contact_time"], "sigma": sigma}
+        data["mask"] = data["mask"].at[i_c].set(1.0)  # the contact free, with no prior: its Jacobian column
+        if options.contact_from_motion:
+            u, sigma, compared = _held_at_combined_contact(
+                free, channels, n_out, compiled, data, fit_weights, u, i_c, held, sigma, groups, n_res,
+                options.misfit_weights, error_table.std(CONTACT_FROM_MOTION, 0.0))
+            held_measured["contact_time"].update(compared)
         u = u.at[i_c].set(free[i_c].to_unconstrained(held.pop("contact_time")))
-        data["mask"] = data["mask"].at[i_c].set(1.0)
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     # residuals and Jacobian in the recording's own sigmas: the covariance widens each channel by its misfit there
     r, jac_u, dvalue_du, traj, preds = finished
@@ -600,30 +663,10 @@ def fit(
     fitted = [i for i, p in enumerate(free) if p.name not in held]
     jac_u, dvalue_du = jac_u[:, fitted], dvalue_du[fitted]
     spec_all, free = free, tuple(free[i] for i in fitted)
-    n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
     unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), groups, n_res,
                                per_channel=options.misfit_weights, tau_at_least=approach_tau_floor(groups))
-    held_measured = {}
-    error_table = model_error or model_error_table(kind_of(measurement))
     if contact_held:
-        k = [p.name for p in free].index("contact_time")
-        seen, sigma = float(measurement.contact_time_s), float(measurement.contact_time_sigma)
-        held_measured["contact_time"] = {"measured": seen, "sigma": sigma}
-        if options.contact_from_motion:
-            # where the fitted channels alone put the contact: the fit continued with it free and
-            # no prior, in the fit's weights, its std theirs and the model's own error of that
-            # estimate (calibrated apart: ``CONTACT_FROM_MOTION``)
-            u_m, cost_m = _contact_from_motion(spec_all, channels, n_out, compiled, {**data, "w": jnp.asarray(fit_weights)},
-                                               u, i_c)
-            if np.isfinite(cost_m):
-                r_m, jac_m, dvalue_m, _, _ = (np.asarray(a) for a in _finish_jit(spec_all, channels, n_out, compiled, data, u_m))
-                unc_m = parameter_covariance(r_m, jac_m[:, fitted], dvalue_m[fitted], np.array([p.typical for p in free]),
-                                             groups, n_res, per_channel=options.misfit_weights,
-                                             tau_at_least=approach_tau_floor(groups))
-                held_measured["contact_time"].update(
-                    model=float(spec_all[i_c].to_physical(u_m[i_c])), model_std_data=float(unc_m.std[k]),
-                    model_std=math.hypot(float(unc_m.std[k]), error_table.std(CONTACT_FROM_MOTION, 0.0)))
-        unc = held_at_measurement(unc, k, sigma)
+        unc = held_at_measurement(unc, [p.name for p in free].index("contact_time"), sigma)
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}

@@ -55,9 +55,11 @@ def prior_lines(priors: dict) -> list[str]:
         u = f" {unit}" if unit else ""
         source = "measured" if name in MEASURED else "prior"
         flag = " **conflict: model and recording disagree**" if p["conflict"] else ""
-        fitted = "held there; the fitted channels alone" if p.get("held") else "fitted"
+        fitted = "the fitted channels alone" if p.get("held") else "fitted"
+        held = (f"; held at the two combined, {p['held_at'] * scale:.4g} +- {p['held_std'] * scale:.2g}{u}"
+                if p.get("held") else "")
         out.append(f"{label}: {source} {p['prior'] * scale:.4g} +- {p['prior_std'] * scale:.2g}{u}, {fitted}"
-                   f" {p['value'] * scale:.4g} +- {p['std'] * scale:.2g}{u} (pull {p['pull']:+.1f} sigma){flag}")
+                   f" {p['value'] * scale:.4g} +- {p['std'] * scale:.2g}{u} (pull {p['pull']:+.1f} sigma){held}{flag}")
     return out
 
 
