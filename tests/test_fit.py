@@ -127,13 +127,23 @@ def _white_part(m):
     return rng.normal(0.0, NOISE["x_m"], len(m.t))
 
 
-def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement):
-    # One Levenberg-Marquardt step from V-SIM's defaults leave the fit far from the data.
+def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement, paper_fit, monkeypatch):
+    # A solver that stops where it started, unconverged (as one Levenberg-Marquardt step from
+    # V-SIM's defaults does), leaves the fit far from the data. Stood in for by one that does
+    # not move: the real one with another step limit would be compiled again (30 s).
+    import jax.numpy as jnp
+
+    import identify.fitting.collision_fit as collision_fit
     from identify.errors import UserError
     from identify.fitting.collision_fit import FitOptions
 
+    def stays(spec, channels, n_out, options, data, u0):
+        r = collision_fit._finish_jit(spec, channels, n_out, options, data, u0)[0]
+        return u0, jnp.sum(r * r), jnp.asarray(False)
+
+    monkeypatch.setattr(collision_fit, "_solve_jit", stays)
     with pytest.raises(UserError, match="did not converge"):
-        fit(paper_measurement, a4, options=FitOptions(starts=1, max_steps=1))
+        fit(paper_measurement, a4, options=FitOptions(starts=1))
 
 
 @pytest.mark.parametrize("transform, kw, value, words", [
@@ -192,9 +202,10 @@ def test_a_contact_time_the_bound_stopped_is_reported_not_identified(a4, paper_m
     parks the contact time at its bound, and must not report that value as measured."""
     from identify.fitting.collision_fit import FitOptions
 
-    late = dataclasses.replace(paper_measurement, t=paper_measurement.t - 0.025)
-    # the same compile as the others; one fit: the misfit-weighted refits, which report the bound
-    # alike, took 39 of this test's 86 s (run alone, the machine loaded)
+    # on the same clock as the others (one compile), the model's contact 24.6 ms before t = 0;
+    # one fit: the misfit-weighted refits, which report the bound alike, took 39 of this
+    # test's 86 s (run alone, the machine loaded)
+    late = synthetic_measurement(a4, named_params("paper_identified"), contact_time=-0.0246)
     r = fit(late, a4, model_error=NONE, options=FitOptions(starts=1, misfit_weights=False))
     assert "contact_time" in r.at_bound and "bound" in r.at_bound["contact_time"]
     ok, reason = r.identified["contact_time"]
@@ -225,18 +236,18 @@ def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pull
     off = dataclasses.replace(synthetic_measurement(a4, named_params("paper_identified"), contact_time=0.005),
                               contact_time_sigma=0.001)
     # the model's own error only where the channels' contact can be weighed against the measured one
-    # (a film's table has it), small here, so the channels weigh more
+    # (a film's table has it; measured 0 there), so the channels weigh by their data alone
     from identify.fitting.collision_fit import CONTACT_FROM_MOTION
     from identify.fitting.model_error import ModelError
 
-    contact_only = ModelError(absolute={CONTACT_FROM_MOTION: 1e-5})
+    contact_only = ModelError(absolute={CONTACT_FROM_MOTION: 0.0})
     r = fit(off, a4, model_error=contact_only)
     pull = r.pulls()["contact_time"]
     assert pull["held"] and pull["prior"] == 0.0 and pull["prior_std"] == 0.001
     # the channels alone put it 4.47 ms late (measured); a start at the measured contact alone stays there
     assert 0.004 < pull["value"] < 0.0055
     assert pull["conflict"] and pull["pull"] == pytest.approx(pull["value"] / np.hypot(0.001, pull["std"]))
-    assert pull["std"] == pytest.approx(np.hypot(pull["std_data"], 1e-5))
+    assert pull["std"] == pytest.approx(pull["std_data"])
     # held where the two combine, weighted by their inverse variances
     w_seen, w_model = 0.001**-2, pull["std"] ** -2
     assert pull["held_at"] == pytest.approx(pull["value"] * w_model / (w_seen + w_model))

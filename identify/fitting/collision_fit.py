@@ -110,7 +110,7 @@ class FitOptions:
         calibration films (README, "How the fit works").
     hold_measured_contact : a first contact the recording measured apart from the fitted
         channels (seen in the film, the load cells' onset) is held, not fitted: a measured
-        fact, not a knob (:func:`fit`), where the model-error table knows how far the
+        fact, not a knob (:func:`fit`), where the model-error table has measured how far the
         channels' own contact can be off (``CONTACT_FROM_MOTION``: a film's). Otherwise, and
         off, it is a prior of the fit.
     contact_from_motion : with a held contact, fit on from the optimum with the contact free
@@ -565,14 +565,14 @@ def fit(
     # others' covariance (least_squares.held_at_measurement). As a prior it was outweighed by
     # the motion's thousands of samples: on the 10 clean scored films whose seen contact was
     # within 0.2 ms of the truth, the fit moved it 0.41 ms later on average (up to 1.57 ms) and
-    # k_compression followed it, 5 % per ms. Held only where the model-error table knows how
-    # far the channels' own contact can be off (CONTACT_FROM_MOTION: a film's): without it the
-    # two cannot be weighed, and the measurement stays a prior (load cells' onset, +- 3 ms on
+    # k_compression followed it, 5 % per ms. Held only where the model-error table has measured
+    # how far the channels' own contact can be off (CONTACT_FROM_MOTION: a film's): without it
+    # the two cannot be weighed, and the measurement stays a prior (load cells' onset, +- 3 ms on
     # NHTSA 10146: held there, the multi-start search fell into another basin, x RMS 13.9 mm
     # against 7.8, and discovery named a progressive stiffness)
     error_table = model_error or model_error_table(kind_of(measurement))
     contact_held = bool(options.hold_measured_contact and measurement.contact_time_sigma
-                        and error_table.std(CONTACT_FROM_MOTION, 0.0) > 0
+                        and CONTACT_FROM_MOTION in error_table.absolute
                         and any(p.name == "contact_time" for p in free) and "contact_time" not in held)
     if contact_held:
         held["contact_time"] = float(measurement.contact_time_s)
