@@ -347,7 +347,10 @@ def fit(
     out : results folder (default ``<recording stem>.identify/`` beside it), or an
         ``identify.report.results.ResultsFolder`` made already; ``write=False`` writes nothing.
     discover : look for physics the base model left out.
-    options : identify.fitting.collision_fit.FitOptions.
+    options : identify.fitting.collision_fit.FitOptions: its starts, seed, solver, face
+        friction, misfit weighting and contact comparison; the solver's step limit and
+        tolerances are discovery's (``identify.discover.loop.CANDIDATE_FIT``), continued
+        while the step limit stops it.
     progress : callable taking a one-line status string, or None.
     force : fit even when the film contradicts the vehicle file (wheelbase, length); the
         result then carries the contradiction in ``"warnings"``.
@@ -405,10 +408,12 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
     free, held = free_parameters(rec.measurement, speed_mps, options.face_friction)
     from identify.discover.loop import CANDIDATE_FIT, discover as discover_missing, fit_base, with_model_choice
 
-    # discovery's base fit is run as its candidates are (one compile); without discovery it is the reported fit
-    base_options = (dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver,
-                                        contact_from_motion=options.contact_from_motion)
-                    if discover else options)
+    # the base fit is run as discovery's candidates are (one compile: the solver's step limit and
+    # tolerances are compiled in, so a recording fitted with and without discovery shares it);
+    # without discovery it is the reported fit, each channel then weighted by its own misfit
+    base_options = dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver,
+                                       contact_from_motion=options.contact_from_motion,
+                                       misfit_weights=options.misfit_weights and not discover)
     say("fitting the collision model (the first run compiles it: ~20 s)")
     base = fit_base(rec.measurement, veh, free=free, options=base_options, speed_mps=speed_mps, progress=say)
     # every later fit holds the contact where the base fit did: the measured one combined with the base model's

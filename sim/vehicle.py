@@ -9,6 +9,8 @@ outline are static metadata.
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 import tomllib
 from pathlib import Path
@@ -90,6 +92,14 @@ class Vehicle(eqx.Module):
     windscreen_top: tuple | None = eqx.field(static=True, default=None)
     engine_mass: float | None = eqx.field(static=True, default=None)
     engine_gap: float | None = eqx.field(static=True, default=None)
+
+    def numbers_only(self) -> "Vehicle":
+        """This vehicle with its static metadata blanked (key, name, outline, windscreen, the
+        engine's estimates): what the simulation computes with. Static fields are part of a
+        compiled program's key, so cars that differ only in them (the same car under another
+        name) run the same compiled programs through this."""
+        return dataclasses.replace(self, key="", name="", silhouette_side=(), windscreen_top=None, engine_mass=None,
+                                   engine_gap=None)
 
     @property
     def cg_to_rear_axle(self):

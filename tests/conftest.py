@@ -16,11 +16,25 @@ import pytest  # noqa: E402
 os.environ["IDENTIFY_NO_COMPILE_CACHE"] = "1"
 
 
+# files whose tests compile the same programs (the same recording, model and fit settings: a
+# compile is most of a fit, ~35-55 s against ~1 s of solving): one worker runs them all, so
+# only the first compiles
+SHARED_COMPILES = {
+    "test_end_to_end.py": "the sample film", "test_bad_input.py": "the sample film",
+    "test_discovery.py": "the paper's synthetic recording", "test_cli_fit.py": "the paper's synthetic recording",
+}
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own, which reads the groups
 def pytest_collection_modifyitems(config, items):
-    """The files that hold slow end-to-end tests first, in their own order: the README's
-    ``--dist loadfile`` hands files to the workers in this order, so the long ones start at
-    once and the short ones fill in at the end, instead of one worker running a long file
-    alone while the other has finished."""
+    """Each test in its file's group (``--dist loadgroup``, the README's: a file's module
+    fixtures are computed once, on one worker), files that compile the same programs in one
+    group (``SHARED_COMPILES``); and the files that hold slow end-to-end tests first, in their
+    own order: the workers take the groups in this order, so the long ones start at once and
+    the short ones fill in at the end, instead of one worker running a long file alone while
+    the other has finished."""
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(SHARED_COMPILES.get(item.path.name, item.path.name)))
     slow = {item.path for item in items if item.get_closest_marker("slow")}
     items.sort(key=lambda item: item.path not in slow)  # stable: the order within each part stays
 

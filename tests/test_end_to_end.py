@@ -1,6 +1,6 @@
 """The README's main command end to end (slow: the video stage, the fit with its compile, a
 results folder), and what reads its results. The sensor recording's end-to-end fit is in
-``test_nhtsa.py``: on a module of its own worker (``pytest -n 2 --dist loadfile``), the two
+``test_nhtsa.py``: on a module of its own worker (``pytest -n 2 --dist loadgroup``), the two
 longest fits run side by side."""
 
 import csv
@@ -60,7 +60,7 @@ def test_notebook_on_the_sample_fit(sample_results, tmp_path, source):
     """notebooks/residuals.ipynb (tests/test_notebook.py) on the sample's results folder, with
     the model from its predictions.csv and, for a folder without one, re-simulated from
     result.json: the same RMS as the fit's. (Here, beside the other readers of the sample's
-    fit, so that one worker of ``pytest -n 2 --dist loadfile`` fits the sample once.)"""
+    fit, so that one worker of ``pytest -n 2 --dist loadgroup`` fits the sample once.)"""
     import shutil
 
     folder = sample_results

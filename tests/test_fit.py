@@ -127,6 +127,28 @@ def _white_part(m):
     return rng.normal(0.0, NOISE["x_m"], len(m.t))
 
 
+def test_a_channel_only_shown_or_a_renamed_car_runs_the_same_compiled_programs(a4, paper_measurement, paper_fit):
+    """A channel the recording derives (shown, not fitted) stays in the compiled fit with
+    weight 0: the fit runs the programs of the same recording with it fitted (a compile is
+    30-55 s, the solve ~1 s), and the channel counts nowhere in the fit. A car's names and
+    outline are no part of them either."""
+    import identify.fitting.collision_fit as collision_fit
+    from identify.fitting.collision_fit import FitOptions
+
+    compiled = collision_fit._solve_jit._cache_size(), collision_fit._finish_jit._cache_size()
+    shown = dataclasses.replace(paper_measurement, derived=("front_wheel_angle_rad",))
+    r = fit(shown, a4, model_error=NONE, options=FitOptions(starts=1))
+    assert (collision_fit._solve_jit._cache_size(), collision_fit._finish_jit._cache_size()) == compiled
+    assert "front_wheel_angle_rad" not in r.rms and "front_wheel_angle_rad" not in r.correlation_time
+    n = len(paper_measurement.t)
+    assert r.dof == paper_fit.dof - n  # its samples are no residuals
+    assert r.rms["x_m"] == pytest.approx(paper_fit.rms["x_m"], rel=0.05)
+    # nor does the same car under another name compile anything (a vehicle's names are static)
+    renamed = dataclasses.replace(a4, key="a4_copy", name="the same car")
+    fit(paper_measurement, renamed, model_error=NONE, options=FitOptions(starts=1))
+    assert (collision_fit._solve_jit._cache_size(), collision_fit._finish_jit._cache_size()) == compiled
+
+
 def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement, paper_fit, monkeypatch):
     # A solver that stops where it started, unconverged (as one Levenberg-Marquardt step from
     # V-SIM's defaults does), leaves the fit far from the data. Stood in for by one that does
@@ -325,11 +347,14 @@ def test_the_approach_keeps_its_own_weight_when_the_crash_is_missed(a4, monkeypa
     import identify.fitting.collision_fit as collision_fit
     from identify.fitting.collision_fit import BEFORE_CONTACT, FitOptions
 
-    noise = {"x_m": 3e-4, "z_m": 3e-4, "pitch_rad": 5e-4}
+    # x, z and pitch fitted; the wheels' angles only shown, so that the fit runs the programs
+    # compiled for the others (``_stack``: one compile)
+    wheels = ("front_wheel_angle_rad", "rear_wheel_angle_rad")
+    noise = {"x_m": 3e-4, "z_m": 3e-4, "pitch_rad": 5e-4, **{c: 0.02 for c in wheels}}
     m = synthetic_measurement(a4, named_params("paper_identified"), noise=noise, speed_sigma=0.0)
     t = m.t
     wobble = 0.006 * np.where(t > 0, np.sin(2 * np.pi * t / 0.06) * np.exp(-t / 0.08), 0.0)
-    m = dataclasses.replace(m, channels={**m.channels, "x_m": m.channels["x_m"] + wobble})
+    m = dataclasses.replace(m, channels={**m.channels, "x_m": m.channels["x_m"] + wobble}, derived=wheels)
     assert m.impact_speed_sigma == 0.0  # no prior: the frames alone measure the speed
     speed = 56.3 / 3.6
 

@@ -264,15 +264,19 @@ def approach_speed(measurement: Measurement) -> float:
 
 
 def _stack(measurement: Measurement):
-    channels = tuple(
-        c for c in FIT_CHANNELS
-        if c in measurement.channels and c not in measurement.derived and measurement.valid(c).any()
-    )
-    if "x_m" not in channels and "vx_mps" not in channels:
+    """(channels, y, w, fitted): every ``FIT_CHANNELS`` channel the measurement has valid
+    samples of, its values and weights 1/sigma stacked (channels, n), and the fitted ones. A
+    derived channel (shown, not fitted: ``Measurement.derived``) is in the stack with weight
+    0, so that a fit that only shows a channel another fits (the cabin alone against the
+    cabin and its engine) runs the same compiled programs (a compile is 30-55 s, the solve ~1 s)."""
+    channels = tuple(c for c in FIT_CHANNELS if c in measurement.channels and measurement.valid(c).any())
+    fitted = tuple(c for c in channels if c not in measurement.derived)
+    if "x_m" not in fitted and "vx_mps" not in fitted:
         raise UserError(f"{measurement.source}: no x_m or vx_mps channel to fit (the car's motion towards the barrier)")
     y = np.stack([np.where(measurement.valid(c), measurement.channels[c], 0.0) for c in channels])
-    w = np.stack([np.where(measurement.valid(c), 1.0 / np.asarray(measurement.sigma[c]), 0.0) for c in channels])
-    return channels, y, w
+    w = np.stack([np.where(measurement.valid(c) & (c in fitted), 1.0 / np.asarray(measurement.sigma[c]), 0.0)
+                  for c in channels])
+    return channels, y, w, fitted
 
 
 def _values(spec, u, data):
@@ -358,6 +362,8 @@ def weighting_groups(channels, w: np.ndarray, t: np.ndarray) -> dict[str, np.nda
     out = {}
     for c, name in enumerate(channels):
         valid = np.flatnonzero(w[c] > 0)
+        if not len(valid):  # shown, not fitted (``_stack``)
+            continue
         before = valid[np.asarray(t)[valid] < 0.0]
         if len(before) >= MIN_BEFORE_CONTACT:
             out[name] = c * n + np.setdiff1d(valid, before)
@@ -542,7 +548,7 @@ def fit(
     UserError
         No usable channel, no impact speed, or no start converged.
     """
-    channels, y, w = _stack(measurement)
+    channels, y, w, fitted_channels = _stack(measurement)
     speed_guess = speed_mps if speed_mps is not None else measurement.impact_speed_mps
     if speed_guess is None:
         speed_guess = approach_speed(measurement)
@@ -600,7 +606,7 @@ def fit(
         y=jnp.asarray(y),
         w=jnp.asarray(w),
         template=template,
-        vehicle=vehicle,
+        vehicle=vehicle.numbers_only(),  # its names and outline are no part of the compiled programs
         speed_guess=jnp.asarray(float(speed_guess)),
         mask=jnp.asarray([0.0 if p.name in held else 1.0 for p in free]),
         held=jnp.asarray([float(held.get(p.name, 0.0)) for p in free]),
@@ -631,7 +637,7 @@ def fit(
 
     u, converged = jnp.asarray(u_all[best]), bool(ok[best])
     n = len(measurement.t)
-    rows = {name: c * n + np.flatnonzero(w[c] > 0) for c, name in enumerate(channels)}
+    rows = {name: c * n + np.flatnonzero(w[c] > 0) for c, name in enumerate(channels) if name in fitted_channels}
     # the groups weighted by their own misfit: the channels, their approach apart (weighting_groups)
     groups = weighting_groups(channels, w, np.asarray(measurement.t)) if options.misfit_weights else rows
     widen = {g: 1.0 for g in groups}  # each group's sigma multiplier in the fit's weights
@@ -675,13 +681,16 @@ def fit(
     predictions, rms = {}, {}
     for c, name in enumerate(channels):
         pred, valid = preds[c], w[c] > 0
-        if name in OFFSET_FREE:
+        if name not in fitted_channels:  # shown and compared, not fitted
+            if name in OFFSET_FREE:
+                continue
+            valid = measurement.valid(name)
+        elif name in OFFSET_FREE:
             pred = pred - float(weighted_offset(pred - y[c], w[c]))
         predictions[name] = pred
         rms[name] = float(np.sqrt(np.mean((pred - y[c])[valid] ** 2)))
-
-    for name in measurement.derived:  # shown and compared, not fitted
-        if name in measurement.channels and name not in OFFSET_FREE:
+    for name in measurement.derived:  # shown, beyond what the fit predicts (a derived channel it does not know)
+        if name in measurement.channels and name not in OFFSET_FREE and name not in predictions:
             pred = np.asarray(predict(traj, name, jnp.asarray(measurement.t), speed, contact_time,
                                       vehicle.wheel_radius, options.solver.output_dt))
             valid = measurement.valid(name)
@@ -721,7 +730,7 @@ def fit(
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
         held_measured=held_measured,
     )
-    result.identified = {**assess_identifiability(result, channels),
+    result.identified = {**assess_identifiability(result, fitted_channels),
                          **log_scale_identifiability(free, result.values, result.std, result.std_data, result.std_model)}
     # no silent bounds: a value the bound stopped is not a value the data gave
     result.at_bound = {p.name: where for p in free if (where := p.at_bound(result.values[p.name]))}
