@@ -314,6 +314,8 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", type=Path, default=None, help="keep the worlds' folders here")
     ap.add_argument("--face-friction", action="store_true", help="fit as 'identify fit --face-friction'")
     ap.add_argument("--table", type=Path, default=None, help="only print the table and summary of a --json file")
+    ap.add_argument("--only", default=None,
+                    help="only these seeds of the plan, comma-separated (to re-measure some worlds after a change)")
     a = ap.parse_args(argv)
     if a.table:
         rows = json.loads(a.table.read_text())["rows"]
@@ -326,6 +328,14 @@ def main(argv=None) -> int:
         ap.error("--calibration and --development are two different sets of worlds: give one")
     base = CALIBRATION_SEED_BASE if a.calibration else DEVELOPMENT_SEED_BASE if a.development else SEED_BASE
     plan = [(seed, effect, a.format, a.keep, a.face_friction) for seed, effect in world_plan(a.n, a.effect, base)]
+    if a.only:
+        try:
+            only = {int(s) for s in a.only.split(",")}
+        except ValueError:
+            ap.error(f"--only takes seeds separated by commas, got {a.only!r}")
+        if only - {p[0] for p in plan}:
+            ap.error(f"--only: seeds {sorted(only - {p[0] for p in plan})} are not among the plan's {plan[0][0]}-{plan[-1][0]}")
+        plan = [p for p in plan if p[0] in only]
     t0 = time.perf_counter()
     rows = []
     partial = a.json.with_suffix(".partial.jsonl") if a.json else None

@@ -412,6 +412,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
     # tolerances are compiled in, so a recording fitted with and without discovery shares it);
     # without discovery it is the reported fit, each channel then weighted by its own misfit
     base_options = dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver,
+                                       hold_measured_contact=options.hold_measured_contact,
                                        contact_from_motion=options.contact_from_motion,
                                        misfit_weights=options.misfit_weights and not discover)
     say("fitting the collision model (the first run compiles it: ~20 s)")
