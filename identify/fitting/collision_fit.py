@@ -415,7 +415,8 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
     combined sigma, {model, model_std_data, model_std, held_at, held_std}); without a finite
     estimate from the channels, (u, the measurement's sigma, {})."""
     seen = held["contact_time"]
-    u_m, cost = _contact_from_motion(spec, channels, n_out, options, {**data, "w": jnp.asarray(weights)}, u, i_c)
+    u_seen = u.at[i_c].set(spec[i_c].to_unconstrained(seen))  # held, its u was never set: the measured value
+    u_m, cost = _contact_from_motion(spec, channels, n_out, options, {**data, "w": jnp.asarray(weights)}, u_seen, i_c)
     if not np.isfinite(cost):
         return u, sigma, {}
     fitted = [i for i, p in enumerate(spec) if p.name not in held or i == i_c]
