@@ -10,7 +10,6 @@ outline are static metadata.
 from __future__ import annotations
 
 import dataclasses
-
 import math
 import tomllib
 from pathlib import Path

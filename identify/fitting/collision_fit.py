@@ -117,8 +117,8 @@ class FitOptions:
         and no prior, to find where the fitted channels alone put it, and hold it where the
         two combined put it (inverse-variance mean, the channels' estimate with the model's
         own error, ``CONTACT_FROM_MOTION``), reported in ``FitResult.held_measured`` and
-        ``FitResult.pulls``; off, it is held where it was measured (discovery's candidate fits,
-        which hold it where the base fit did).
+        ``FitResult.pulls``; off, it is held where it was measured (the fits after the base
+        one, whose measured contact is where the base fit held it).
     """
 
     starts: int = 5
@@ -407,9 +407,8 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
     standard deviation ``sigma``) combined with where the fitted channels
     alone put it (:func:`_contact_from_motion`, its std the data's and ``model_std``, the
     model's own error of that estimate, in quadrature): the inverse-variance mean, where the
-    fit is then held (``held`` updated, the fit continued from ``u`` in ``weights``). A film's
-    contact seen to 0.5 ms against the motion's 2 ms stays near where it was seen; load cells'
-    onset known to 3 ms moves to the motion's.
+    fit is then held (``held`` updated, the fit continued from ``u`` in ``weights``): the
+    nearer the measurement's sigma is to the channels', the more the channels move it.
 
     ``data``: the fit's, its contact's mask 1 (free) and no prior on it. Returns (u, the
     combined sigma, {model, model_std_data, model_std, held_at, held_std}); without a finite
@@ -431,14 +430,22 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
         held["contact_time"] = at
         trial = {**data, "w": jnp.asarray(weights), "mask": data["mask"].at[i_c].set(0.0),
                  "held": data["held"].at[i_c].set(at)}
-        for _ in range(WEIGHTED_SOLVES):  # continued while the step limit stopped it
-            u1, cost1, ok = _solve_jit(spec, channels, n_out, options, trial, u)
-            if not np.isfinite(float(cost1)):
-                break
-            u = u1
-            if bool(ok):
-                break
+        u, _ = _solve_continued(spec, channels, n_out, options, trial, u)
     return u, at_std, {"model": model, "model_std_data": std_data, "model_std": std, "held_at": at, "held_std": at_std}
+
+
+def _solve_continued(spec, channels, n_out, options, data, u):
+    """The solve from ``u`` continued while its step limit stopped it, at most
+    ``WEIGHTED_SOLVES`` runs: (u of the last run whose cost was finite, ``u`` if none; whether
+    the last run converged with a finite cost)."""
+    for _ in range(WEIGHTED_SOLVES):
+        u1, cost, ok = _solve_jit(spec, channels, n_out, options, data, u)
+        if not np.isfinite(float(cost)):
+            return u, False
+        u = u1
+        if bool(ok):
+            return u, True
+    return u, False
 
 
 def widened(w: np.ndarray, groups: dict, factors: dict) -> np.ndarray:
@@ -468,12 +475,8 @@ def _weighted_by_misfit(spec, channels, n_out, options, data, u, groups: dict, n
         new = {g: math.sqrt(tau[g] * misfit[g]) for g in groups}
         if np.allclose([new[g] for g in groups], [widen[g] for g in groups], rtol=0.1):
             break
-        trial, u1 = {**data, "w": jnp.asarray(widened(w, groups, new))}, u
-        for _ in range(WEIGHTED_SOLVES):  # continued while the step limit stopped it
-            u1, cost, ok = _solve_jit(spec, channels, n_out, options, trial, u1)
-            if bool(ok) or not np.isfinite(float(cost)):
-                break
-        if not (bool(ok) and np.isfinite(float(cost))):
+        u1, ok = _solve_continued(spec, channels, n_out, options, {**data, "w": jnp.asarray(widened(w, groups, new))}, u)
+        if not ok:
             break
         u, widen = u1, new
         finished = _finish_jit(spec, channels, n_out, options, data, u)
@@ -690,7 +693,7 @@ def fit(
             pred = pred - float(weighted_offset(pred - y[c], w[c]))
         predictions[name] = pred
         rms[name] = float(np.sqrt(np.mean((pred - y[c])[valid] ** 2)))
-    for name in measurement.derived:  # shown, beyond what the fit predicts (a derived channel it does not know)
+    for name in measurement.derived:  # shown: a derived channel with no valid sample is not in the stack
         if name in measurement.channels and name not in OFFSET_FREE and name not in predictions:
             pred = np.asarray(predict(traj, name, jnp.asarray(measurement.t), speed, contact_time,
                                       vehicle.wheel_radius, options.solver.output_dt))
