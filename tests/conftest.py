@@ -4,7 +4,13 @@ session (JAX compiles take seconds)."""
 
 import os
 
-import jax
+# two workers share the two cores (the README's `-n 2`): XLA's intra-op thread pool would put
+# each on both, where its threads mostly wait (the NHTSA fit: 83 s on one core, 83 s on two
+# with 132 s of CPU), and the other worker waits for them
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_cpu_multi_thread_eigen=false").strip()
+
+import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 
@@ -25,16 +31,40 @@ SHARED_COMPILES = {
 }
 
 
-@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own, which reads the groups
+def work_unit(nodeid: str) -> str:
+    """The unit of work one worker runs whole: the test's file, or its ``SHARED_COMPILES`` group."""
+    path = nodeid.split("::", 1)[0]
+    return SHARED_COMPILES.get(path.rsplit("/", 1)[-1], path)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup`` (the README's): each :func:`work_unit` on one worker, so a file's
+    module fixtures are computed once and the files of a ``SHARED_COMPILES`` group compile
+    once; the units in collection order (:func:`pytest_collection_modifyitems`), not by size.
+
+    Done here rather than with ``xdist_group`` marks: pytest-xdist groups those by appending
+    the group to the test's node id, which pytest 9.2 no longer lets it change, so the marks
+    are silently ignored and the tests dealt out one by one (pytest-xdist issue 1386; on this
+    suite each module fixture then ran once per worker and the suite took 838 s)."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ByWorkUnit(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return work_unit(nodeid)
+
+    config.option.loadscopereorder = False
+    return ByWorkUnit(config, log)
+
+
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    """Each test in its file's group (``--dist loadgroup``, the README's: a file's module
-    fixtures are computed once, on one worker), files that compile the same programs in one
-    group (``SHARED_COMPILES``); and the files that hold slow end-to-end tests first, in their
-    own order: the workers take the groups in this order, so the long ones start at once and
-    the short ones fill in at the end, instead of one worker running a long file alone while
-    the other has finished."""
-    for item in items:
-        item.add_marker(pytest.mark.xdist_group(SHARED_COMPILES.get(item.path.name, item.path.name)))
+    """The files that hold slow end-to-end tests first, in their own order: the workers take
+    the work units in this order (:func:`pytest_xdist_make_scheduler`), so the long ones
+    start at once and the short ones fill in at the end, instead of one worker running a long
+    file alone while the other has finished."""
     slow = {item.path for item in items if item.get_closest_marker("slow")}
     items.sort(key=lambda item: item.path not in slow)  # stable: the order within each part stays
 
