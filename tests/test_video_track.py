@@ -234,6 +234,29 @@ def test_film_without_a_tape_takes_its_scale_from_the_hubs_and_the_wheelbase():
     assert tracks.impact_speed_mps == pytest.approx(V, rel=0.005)
 
 
+def test_a_misread_tape_is_overruled_by_the_hubs_distance_and_the_wheels_spin():
+    """A 0.1 m tape read with --tape-segment 0.2 (a tape whose period is read as two
+    segments gives the same): its scale is twice the hub targets' distance against the
+    wheelbase, and the wheels' rolling speed over the approach backs the hubs'. On a
+    development film (seed 960016) a tape misread by a factor 3 had given the speed as
+    19 km/h for 56 with a note only."""
+    car = golf()
+    film, truth, _ = render(car, crash_motion(car, n_post=60))
+    tracks = track_film(film, car, tape_segment_m=0.2)
+    assert tracks.scale_source == "hub targets and wheelbase"
+    assert tracks.scale_m_per_px == pytest.approx(0.004, rel=0.01)
+    assert any("the tape is misread or its segment is not 0.2 m" in n for n in tracks.notes)
+    assert tracks.impact_speed_mps == pytest.approx(V, rel=0.01)
+    # the spin backs neither when the vehicle file's wheel radius is 50 % off too: refused
+    import dataclasses
+
+    wrong = dataclasses.replace(car, wheel_radius=1.5 * car.wheel_radius)
+    with pytest.raises(VideoError, match="the wheels' spin backs neither.*check --tape-segment"):
+        track_film(film, wrong, tape_segment_m=0.2)
+    # the tape's segment given right, the tape's scale stands
+    assert track_film(film, car).scale_source == "checker tape"
+
+
 @pytest.mark.parametrize("yaw_deg", [3.0, -3.0])
 def test_camera_yawed_against_the_cars_plane_is_taken_out(yaw_deg):
     # 3 degrees at 6 m: the car's plane is 1.7 % smaller in the picture at one end of the

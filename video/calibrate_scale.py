@@ -266,8 +266,37 @@ WHEELBASE_SIGMA_M = 0.005
 HUB_PLANE_REL_SIGMA = 0.006
 
 
+def scale_from_spin(t: np.ndarray, centre_u_px: np.ndarray, angle_rad: np.ndarray, wheel_radius_m: float) -> float:
+    """Scale (m/px) a freely rolling wheel implies: its hub travels ``wheel_radius_m`` times
+    its spin (rad/s) per second, and its image centre ``|du/dt|`` px/s over the same frames
+    (straight-line fits; a free wheel's rolling radius is a few per cent under the vehicle
+    file's, which its users allow for). Independent of any tape and of the wheelbase.
+
+    Parameters
+    ----------
+    t : (n,) s
+        Frame times (the approach: before contact).
+    centre_u_px, angle_rad : (n,)
+        The hub target's image column, px, and its pattern's unwrapped orientation, rad
+        (NaN where not seen).
+    wheel_radius_m : float
+        The vehicle file's wheel radius, m.
+
+    Returns
+    -------
+    float
+        m/px; NaN with fewer than 5 frames seen or a hub that does not move.
+    """
+    ok = np.isfinite(centre_u_px) & np.isfinite(angle_rad) & np.isfinite(t)
+    if ok.sum() < 5:
+        return float("nan")
+    spin = abs(np.polyfit(t[ok], angle_rad[ok], 1)[0])
+    speed = abs(np.polyfit(t[ok], centre_u_px[ok], 1)[0])
+    return float(wheel_radius_m * spin / speed) if speed > 0 else float("nan")
+
+
 def scale_from_hubs(spacing_px: float, spacing_sigma_px: float, wheelbase_m: float,
-                    lens: LensDistortion) -> ScaleEstimate:
+                    lens: LensDistortion, why: str = "no tape being in view") -> ScaleEstimate:
     """Scale (m/px) in the car's plane from the hub targets' image distance and the
     vehicle's wheelbase, for a film without a reference tape.
 
@@ -280,6 +309,8 @@ def scale_from_hubs(spacing_px: float, spacing_sigma_px: float, wheelbase_m: flo
         The vehicle file's wheelbase, m.
     lens : LensDistortion
         The lens model the centres were taken through (without a tape: none measured).
+    why : str
+        Why the scale is not the tape's, for the note.
 
     Returns
     -------
@@ -301,7 +332,7 @@ def scale_from_hubs(spacing_px: float, spacing_sigma_px: float, wheelbase_m: flo
                         + HUB_PLANE_REL_SIGMA ** 2))
     note = (f"scale {1e3 * m_per_px:.4f} +- {1e3 * m_per_px * rel:.4f} mm/px ({100 * rel:.2f} %) from the "
             f"hub targets' distance before contact ({spacing_px:.2f} px) and the vehicle file's wheelbase "
-            f"({wheelbase_m:.3f} m), no tape being in view: the sigma counts the hubs' plane a few cm inboard "
+            f"({wheelbase_m:.3f} m), {why}: the sigma counts the hubs' plane a few cm inboard "
             f"of the car's side ({100 * HUB_PLANE_REL_SIGMA:.1f} %); the film's wheelbase cannot check the "
             "vehicle file (it set the scale), its outline's length still does")
     return ScaleEstimate(m_per_px=float(m_per_px), sigma=float(m_per_px * rel), pitch_px=float(spacing_px),

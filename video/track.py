@@ -302,28 +302,34 @@ def _no_lens(frame0):
                                  "straightness and even segments measure them): not corrected")
 
 
-def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry, lens, where: str,
-                     notes: list):
-    """The scale of a film without a tape (``video.calibrate.scale_from_hubs``): the hub
-    targets' median distance over the approach, before the body targets' deceleration onset
-    (the wheelbase is not crushed yet), against the vehicle file's wheelbase. VideoError
-    when the film has no front and rear hub target: then it has no scale reference."""
-    from video.calibrate import scale_from_hubs
+def _approach(uv, sigma_px, roles, ref: int, fps: float) -> np.ndarray:
+    """Frames of the approach, (n,) bool: before the body targets' deceleration onset (in
+    px, so before any scale is known), less two frames."""
     from video.motion import body_pose, contact_time
 
-    kf, kr = roles.index("front_hub"), roles.index("rear_hub")
-    if kf is None or kr is None:
-        raise VideoError(f"no scale reference in {where}: no checker tape in frame 0 and no "
-                         f"{'front' if kf is None else 'rear'} hub target to take the scale from the "
-                         "wheelbase; film a tape in the car's plane or targets on both hubs")
-    # the approach: before the deceleration onset of the body targets' motion, in px
     pose = body_pose(uv, sigma_px, roles.body, uv[ref, roles.body].mean(axis=0), ref)
     frame_t = np.arange(len(uv)) / fps
     x_px = roles.direction * (pose.point[:, 0] - pose.point[ref, 0])
     onset, _ = contact_time(frame_t, x_px, pose.point_sigma, fps)
     before = np.zeros(len(uv), bool)
     before[:max(int(onset * fps) - 2, 3)] = True
-    both = before & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
+    return before
+
+
+def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry, lens, where: str,
+                     notes: list, why: str = "no tape being in view"):
+    """The scale of a film without a tape (``video.calibrate.scale_from_hubs``): the hub
+    targets' median distance over the approach (:func:`_approach`: the wheelbase is not
+    crushed yet), against the vehicle file's wheelbase. VideoError when the film has no
+    front and rear hub target: then it has no scale reference."""
+    from video.calibrate import scale_from_hubs
+
+    kf, kr = roles.index("front_hub"), roles.index("rear_hub")
+    if kf is None or kr is None:
+        raise VideoError(f"no scale reference in {where}: no checker tape in frame 0 and no "
+                         f"{'front' if kf is None else 'rear'} hub target to take the scale from the "
+                         "wheelbase; film a tape in the car's plane or targets on both hubs")
+    both = _approach(uv, sigma_px, roles, ref, fps) & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
     if both.sum() < 3:
         raise VideoError(f"no scale reference in {where}: no checker tape in frame 0, and the hub "
                          f"targets are seen together in {int(both.sum())} frame(s) before contact "
@@ -333,9 +339,57 @@ def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry
     # over the approach is not credited with averaging them out
     sig = float(np.nanmedian(np.hypot(sigma_px[both, kf], sigma_px[both, kr])))
     est = scale_from_hubs(float(np.median(spacing)), sig if np.isfinite(sig) else 0.0,
-                          float(car.wheelbase), lens)
+                          float(car.wheelbase), lens, why)
     notes.extend(est.notes + (lens.note,))
     return est
+
+
+#: A tape's scale a factor of this or more from the hub targets' distance against the vehicle
+#: file's wheelbase is a misread tape (its period read as two or three segments) or a wrong
+#: ``--tape-segment``, not a vehicle file's wheelbase off (a few per cent for the wrong model
+#: year, 30 % between a city car and a limousine): the wheels' spin decides.
+TAPE_HUB_CONFLICT = 1.5
+#: ... backing the scale it comes within this share of (a free wheel's rolling radius is 2-3 %
+#: under its unloaded one; a tape misread is 50 % off or more).
+SPIN_BACKS = 0.15
+
+
+def _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, ref: int, fps: float, car: CarGeometry, where: str,
+                          notes: list):
+    """The tape's scale ``est``, or the hub targets' where the two are a factor
+    :data:`TAPE_HUB_CONFLICT` apart and the wheels' spin over the approach (their rolling
+    speed, :func:`video.calibrate.scale_from_spin`) backs the hubs' and not the tape's.
+    VideoError when it backs neither; the tape's stands where there are no hubs to check it
+    (or the spin backs it: then the vehicle file is doubtful, which the CG's note says)."""
+    from video.calibrate import scale_from_spin
+
+    if est.source != "checker tape" or roles.index("front_hub") is None or roles.index("rear_hub") is None:
+        return est
+    try:
+        hubs = _scale_from_hubs(uv, sigma_px, roles, ref, fps, car, est.lens, where, [], "the tape being misread")
+    except VideoError:
+        return est
+    factor = est.m_per_px / hubs.m_per_px
+    if max(factor, 1.0 / factor) < TAPE_HUB_CONFLICT:
+        return est
+    approach, t = _approach(uv, sigma_px, roles, ref, fps), np.arange(len(uv)) / fps
+    spins = [scale_from_spin(t[approach], uv[approach, k, 0], tt.angle[approach, k], float(car.wheel_radius))
+             for k in (roles.index("front_hub"), roles.index("rear_hub"))]
+    spin = float(np.nanmedian(spins)) if np.isfinite(spins).any() else float("nan")
+    said = (f"the checker tape's scale ({1e3 * est.m_per_px:.3f} mm/px for a {est.tape_segment_m:g} m segment) "
+            f"is {factor:.2f} times the hub targets' distance against the vehicle file's wheelbase "
+            f"({1e3 * hubs.m_per_px:.3f} mm/px)")
+    if abs(spin / hubs.m_per_px - 1.0) < SPIN_BACKS:
+        notes.append(f"{said}; the wheels' spin over the approach backs the hubs' ({1e3 * spin:.3f} mm/px with the "
+                     f"wheel radius {float(car.wheel_radius):.3f} m): the tape is misread or its segment is not "
+                     f"{est.tape_segment_m:g} m, so the scale is taken from the hub targets")
+        notes.extend(hubs.notes)
+        return hubs
+    if abs(spin / est.m_per_px - 1.0) < SPIN_BACKS:
+        return est
+    spun = (f"the wheels' spin backs neither ({1e3 * spin:.3f} mm/px)" if np.isfinite(spin)
+            else "the wheels' spin is not measured over the approach to decide")
+    raise VideoError(f"no scale to trust in {where}: {said}, and {spun}; check --tape-segment and the vehicle file")
 
 
 def _first_targets(frame0, config: TrackerConfig, where: str):
@@ -625,6 +679,8 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     ref = _reference(uv, roles.body)
     if est is None:
         est = _scale_from_hubs(uv, sigma_px, roles, ref, fps, car, lens, where, notes)
+    else:
+        est = _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, ref, fps, car, where, notes)
     s, s_sig = est.m_per_px, est.sigma
     cg_uv, cg_src, sil = _cg(film, uv, tt, roles, ref, car, est, notes)
     p = _pose(uv, sigma_px, roles.body, cg_uv, ref, d, s, fps, notes)
