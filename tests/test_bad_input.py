@@ -217,7 +217,8 @@ def test_consistency_thresholds():
 
 def test_the_wheelbase_decides_and_an_outline_length_alone_only_warns():
     # the outline's length is the silhouette fit's, which a background can fool: beside a
-    # wheelbase that agrees it is a warning; it stops the run only where no hubs were seen
+    # wheelbase that agrees it is a warning; it stops the run only where no hubs were seen and
+    # it is more than LENGTH_ALONE_DECIDES off
     from types import SimpleNamespace
 
     from identify.recordings.consistency import check_film_against_vehicle
@@ -228,8 +229,12 @@ def test_the_wheelbase_decides_and_an_outline_length_alone_only_warns():
     short_outline = {"outline_length_m": 3.985, "outline_length_sigma_m": 0.01}
     warned = check_film_against_vehicle(SimpleNamespace(geometry={**good_hubs, **short_outline}), veh, "audi_a4")
     assert len(warned) == 1 and "length 3.985 m" in warned[0] and "outline fit is suspect" in warned[0]
-    with pytest.raises(UserError, match="length 3.985 m contradicts"):
-        check_film_against_vehicle(SimpleNamespace(geometry=short_outline), veh, "audi_a4")
+    # without hubs, 15 % short (as a fooled outline fit came out) warns; 30 % short stops the run
+    warned = check_film_against_vehicle(SimpleNamespace(geometry=short_outline), veh, "audi_a4")
+    assert len(warned) == 1 and "length 3.985 m contradicts" in warned[0] and "no hub targets" in warned[0]
+    with pytest.raises(UserError, match="length 3.292 m contradicts"):
+        check_film_against_vehicle(SimpleNamespace(geometry={**short_outline, "outline_length_m": 3.292}), veh,
+                                   "audi_a4")
     with pytest.raises(UserError, match="wheelbase"):
         check_film_against_vehicle(SimpleNamespace(geometry={**short_outline, "hub_spacing_m": 2.637,
                                                              "hub_spacing_sigma_m": 0.0005}), veh, "audi_a4")
