@@ -269,8 +269,9 @@ HUB_PLANE_REL_SIGMA = 0.006
 def scale_from_spin(t: np.ndarray, centre_u_px: np.ndarray, angle_rad: np.ndarray, wheel_radius_m: float) -> float:
     """Scale (m/px) a freely rolling wheel implies: its hub travels ``wheel_radius_m`` times
     its spin (rad/s) per second, and its image centre ``|du/dt|`` px/s over the same frames
-    (straight-line fits; a free wheel's rolling radius is a few per cent under the vehicle
-    file's, which its users allow for). Independent of any tape and of the wheelbase.
+    (straight-line fits). A free wheel rolls on a radius a few per cent under the vehicle
+    file's unloaded one, so this checks a scale rather than measures it; it depends on no
+    tape and not on the wheelbase.
 
     Parameters
     ----------
