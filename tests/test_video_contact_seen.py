@@ -207,6 +207,14 @@ def test_an_onset_guessed_past_the_frames_is_not_seen_without_an_error():
     assert seen.kind == "not_seen" and "too few frames" in seen.note
 
 
+def test_a_nose_placed_outside_the_picture_is_not_seen_and_said_so():
+    # a wrong scale or CG puts the nose's rows below the picture: no grey levels to compare
+    frames, pose, nose = _drawn_film()
+    seen = see_contact(frames.__getitem__, np.arange(len(frames)) / FPS, pose, nose, (200.0, 240.0), -1,
+                       guess_s=0.024)
+    assert seen.kind == "not_seen" and "falls outside the picture" in seen.note
+
+
 def test_a_car_as_grey_as_the_background_is_not_seen():
     frames, pose, nose = _drawn_film()
     flat = [np.full_like(f, 110) for f in frames]

@@ -716,7 +716,11 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
         gray = _frame_against(frame_at, i, background, rows, raw[0] + d * LOCATE_PX, d, shift)
         mid = 0.5 * (raw[0] + nose0[0])
         new = _band(mid + d * np.linspace(-0.25, 0.25, 9) * moved, rows)
-        level = float(np.nanmedian(np.abs(sample(gray, new) - sample(background, new - shift))))
+        diff = np.abs(sample(gray, new) - sample(background, new - shift))
+        if not np.isfinite(diff).any():
+            return (f"the nose, placed from the CG and the scale, falls outside the picture in frame {i} "
+                    "(or the camera's shake there is not measured)")
+        level = float(np.nanmedian(diff))
         if not level > CONTRAST_MIN:
             return (f"the car's front differs from the background by {level:.1f} grey levels in frame {i}: "
                     "too little to see it stop")
