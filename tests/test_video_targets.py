@@ -100,6 +100,25 @@ def test_colour_uint8_black_yellow_target():
     assert np.hypot(*(det.centres[0] - [40.3, 37.8])) < 0.1
 
 
+def test_targets_outranked_by_hundreds_of_tape_junctions_are_found():
+    """Four checker tapes (T-junctions at every segment boundary, ~640 saddle maxima
+    stronger than the targets) and three targets whose light quadrants are as grey as the
+    car (a bow-tie, a weaker response): examined strongest first, the targets lie beyond
+    the first few hundred maxima (300, the old cap, found one)."""
+    H, W = 300, 640
+    img = np.full((H, W), 0.5, np.float32)
+    for row in range(4):
+        v0 = 12 + 24 * row
+        for k in range(W // 8):
+            img[v0:v0 + 10, 8 * k:8 * k + 8] = 0.05 if k % 2 else 0.95
+    img[120:, :] = 0.85
+    centres = [(120.3, 200.6), (320.7, 230.2), (520.1, 190.4)]
+    img = draw_targets((H, W), centres, [6.0] * 3, [0.2, 0.9, 1.4], bg=0.85, dark=0.3, light=0.85, image=img)
+    img += np.random.default_rng(1).normal(0, 0.01, img.shape).astype(np.float32)
+    det = detect_targets(img)
+    assert len(det) == 3 and all(np.min(np.hypot(*(det.centres - c).T)) < 0.3 for c in centres), det.centres
+
+
 def test_no_false_targets_on_tape_edges_blobs_and_noise():
     rng = np.random.default_rng(3)
     img = np.full((160, 240), 0.5, np.float32)

@@ -234,6 +234,31 @@ def test_film_without_a_tape_takes_its_scale_from_the_hubs_and_the_wheelbase():
     assert tracks.impact_speed_mps == pytest.approx(V, rel=0.005)
 
 
+def test_a_target_that_turns_only_after_contact_is_no_hub():
+    """Hub targets turn as the car rolls up to the barrier; a target on the crushing front
+    turns only after contact (scored film 910038: 0.00 rad before, 0.62 after, taken for
+    the front hub and its angle for the wheel's)."""
+    from types import SimpleNamespace
+
+    from video.motion import Roles
+    from video.track import _rolling_hubs
+
+    motion = crash_motion(golf())
+    n = len(motion.t)
+    u = motion.x / 0.004  # px at 4 mm/px
+    offsets = [(-300.0, -40.0), (-100.0, -60.0), (100.0, -40.0), (250.0, 40.0), (-250.0, 40.0)]
+    uv = np.stack([np.column_stack([u + du, np.full(n, 200.0 + dv)]) for du, dv in offsets], axis=1)
+    after = np.where(motion.t > 0, 8.0 * motion.t, 0.0)  # turns from contact on
+    angle = np.zeros((n, 5))
+    angle[:, 3] = np.asarray(motion.front_wheel_angle)   # rolls: a hub
+    angle[:, 4] = after                                   # the crushing front's target
+    roles = Roles(kind=("body", "body", "body", "rear_hub", "front_hub"), direction=1, body=np.array([0, 1, 2]))
+    notes = []
+    kept = _rolling_hubs(roles, uv, np.full((n, 5), 0.05), SimpleNamespace(angle=angle), 0, 1000.0, notes)
+    assert kept.kind == ("body", "body", "body", "rear_hub", "other")
+    assert len(notes) == 1 and "target4 turns only after contact" in notes[0]
+
+
 def test_a_misread_tape_is_overruled_by_the_hubs_distance_and_the_wheels_spin():
     """A 0.1 m tape read with --tape-segment 0.2 (a tape whose period is read as two
     segments gives the same): its scale is twice the hub targets' distance against the
