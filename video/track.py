@@ -353,11 +353,15 @@ HUB_APPROACH_TURN = 0.25
 
 def _rolling_hubs(roles, uv, sigma_px, tt, ref: int, fps: float, notes: list):
     """``roles`` with each hub target that does not turn over the approach (:func:`_approach`)
-    by :data:`HUB_APPROACH_TURN` made an "other" target, said in the notes."""
+    by :data:`HUB_APPROACH_TURN` made an "other" target, said in the notes; unchanged where
+    the approach cannot be told (no deceleration onset in px)."""
     hubs = [k for k, kind in enumerate(roles.kind) if kind in ("front_hub", "rear_hub")]
     if not hubs:
         return roles
-    approach = _approach(uv, sigma_px, roles, ref, fps)
+    try:
+        approach = _approach(uv, sigma_px, roles, ref, fps)
+    except VideoError:  # no onset in px to tell the approach by (a short film): nothing to check
+        return roles
     kind = list(roles.kind)
     for k in hubs:
         a = tt.angle[approach, k]
@@ -397,7 +401,7 @@ def _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, ref: int, fps: float, ca
     factor = est.m_per_px / hubs.m_per_px
     if max(factor, 1.0 / factor) < TAPE_HUB_CONFLICT:
         return est
-    approach, t = _approach(uv, sigma_px, roles, ref, fps), np.arange(len(uv)) / fps
+    approach, t = _approach(uv, sigma_px, roles, ref, fps), np.arange(len(uv)) / fps  # _scale_from_hubs found it
     spins = [scale_from_spin(t[approach], uv[approach, k, 0], tt.angle[approach, k], float(car.wheel_radius))
              for k in (roles.index("front_hub"), roles.index("rear_hub"))]
     spin = float(np.nanmedian(spins)) if np.isfinite(spins).any() else float("nan")
