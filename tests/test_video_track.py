@@ -241,7 +241,7 @@ def test_a_target_that_turns_only_after_contact_is_no_hub():
     from types import SimpleNamespace
 
     from video.motion import Roles
-    from video.track import _rolling_hubs
+    from video.track import _approach, _rolling_hubs
 
     motion = crash_motion(golf())
     n = len(motion.t)
@@ -254,7 +254,8 @@ def test_a_target_that_turns_only_after_contact_is_no_hub():
     angle[:, 4] = after                                   # the crushing front's target
     roles = Roles(kind=("body", "body", "body", "rear_hub", "front_hub"), direction=1, body=np.array([0, 1, 2]))
     notes = []
-    kept = _rolling_hubs(roles, uv, np.full((n, 5), 0.05), SimpleNamespace(angle=angle), 0, 1000.0, notes)
+    approach = _approach(uv, np.full((n, 5), 0.05), roles, 0, 1000.0)
+    kept = _rolling_hubs(roles, SimpleNamespace(angle=angle), approach, notes)
     assert kept.kind == ("body", "body", "body", "rear_hub", "other")
     assert len(notes) == 1 and "target4 turns only after contact" in notes[0]
 

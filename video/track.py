@@ -316,12 +316,13 @@ def _approach(uv, sigma_px, roles, ref: int, fps: float) -> np.ndarray:
     return before
 
 
-def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry, lens, where: str,
+def _scale_from_hubs(uv, sigma_px, roles, approach, car: CarGeometry, lens, where: str,
                      notes: list, why: str = "no tape being in view"):
     """The scale of a film without a tape (``video.calibrate.scale_from_hubs``): the hub
-    targets' median distance over the approach (:func:`_approach`: the wheelbase is not
+    targets' median distance over the ``approach`` (:func:`_approach`: the wheelbase is not
     crushed yet), against the vehicle file's wheelbase. VideoError when the film has no
-    front and rear hub target: then it has no scale reference."""
+    front and rear hub target (then it has no scale reference), or no approach to take
+    their distance over (``approach`` is then the VideoError that said why)."""
     from video.calibrate import scale_from_hubs
 
     kf, kr = roles.index("front_hub"), roles.index("rear_hub")
@@ -329,7 +330,9 @@ def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry
         raise VideoError(f"no scale reference in {where}: no checker tape in frame 0 and no "
                          f"{'front' if kf is None else 'rear'} hub target to take the scale from the "
                          "wheelbase; film a tape in the car's plane or targets on both hubs")
-    both = _approach(uv, sigma_px, roles, ref, fps) & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
+    if isinstance(approach, VideoError):
+        raise approach
+    both = approach & np.isfinite(uv[:, kf, 0]) & np.isfinite(uv[:, kr, 0])
     if both.sum() < 3:
         raise VideoError(f"no scale reference in {where}: no checker tape in frame 0, and the hub "
                          f"targets are seen together in {int(both.sum())} frame(s) before contact "
@@ -351,16 +354,13 @@ def _scale_from_hubs(uv, sigma_px, roles, ref: int, fps: float, car: CarGeometry
 HUB_APPROACH_TURN = 0.25
 
 
-def _rolling_hubs(roles, uv, sigma_px, tt, ref: int, fps: float, notes: list):
-    """``roles`` with each hub target that does not turn over the approach (:func:`_approach`)
-    by :data:`HUB_APPROACH_TURN` made an "other" target, said in the notes; unchanged where
-    the approach cannot be told (no deceleration onset in px)."""
+def _rolling_hubs(roles, tt, approach, notes: list):
+    """``roles`` with each hub target that does not turn over the ``approach``
+    (:func:`_approach`) by :data:`HUB_APPROACH_TURN` made an "other" target, said in the
+    notes; unchanged where the approach cannot be told (``approach`` a VideoError: no
+    deceleration onset in px, a short film)."""
     hubs = [k for k, kind in enumerate(roles.kind) if kind in ("front_hub", "rear_hub")]
-    if not hubs:
-        return roles
-    try:
-        approach = _approach(uv, sigma_px, roles, ref, fps)
-    except VideoError:  # no onset in px to tell the approach by (a short film): nothing to check
+    if not hubs or isinstance(approach, VideoError):
         return roles
     kind = list(roles.kind)
     for k in hubs:
@@ -383,7 +383,7 @@ TAPE_HUB_CONFLICT = 1.5
 SPIN_BACKS = 0.15
 
 
-def _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, ref: int, fps: float, car: CarGeometry, where: str,
+def _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, approach, fps: float, car: CarGeometry, where: str,
                           notes: list):
     """The tape's scale ``est``, or the hub targets' where the two are a factor
     :data:`TAPE_HUB_CONFLICT` apart and the wheels' spin over the approach (their rolling
@@ -395,13 +395,13 @@ def _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, ref: int, fps: float, ca
     if est.source != "checker tape" or roles.index("front_hub") is None or roles.index("rear_hub") is None:
         return est
     try:
-        hubs = _scale_from_hubs(uv, sigma_px, roles, ref, fps, car, est.lens, where, [], "the tape being misread")
+        hubs = _scale_from_hubs(uv, sigma_px, roles, approach, car, est.lens, where, [], "the tape being misread")
     except VideoError:
         return est
     factor = est.m_per_px / hubs.m_per_px
     if max(factor, 1.0 / factor) < TAPE_HUB_CONFLICT:
         return est
-    approach, t = _approach(uv, sigma_px, roles, ref, fps), np.arange(len(uv)) / fps  # _scale_from_hubs found it
+    t = np.arange(len(uv)) / fps
     spins = [scale_from_spin(t[approach], uv[approach, k, 0], tt.angle[approach, k], float(car.wheel_radius))
              for k in (roles.index("front_hub"), roles.index("rear_hub"))]
     spin = float(np.nanmedian(spins)) if np.isfinite(spins).any() else float("nan")
@@ -452,7 +452,8 @@ def _follow(film, n: int, first, lens, config: TrackerConfig, progress, notes: l
 def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list):
     """Fixed, hub and body targets (``video.motion.classify_targets``) and the camera's
     shake taken out on the fixed ones: (roles, centres, their sigmas, the correction or
-    None)."""
+    None); the hubs are checked afterwards (:func:`_rolling_hubs`), then the roles said
+    (:func:`_say_targets`)."""
     from video.motion import classify_targets, stabilise_on_fixed
 
     roles = classify_targets(uv, tt.angle)
@@ -471,6 +472,11 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list):
     elif config.stabilise and not len(fixed):
         notes.append("no fixed target (barrier, floor) in view: a camera shaken by the impact could not be "
                      "taken out of the tracks")
+    return roles, uv, sigma_px, stab
+
+
+def _say_targets(uv, roles, notes: list) -> None:
+    """The notes of what each target was taken for, and where each one was lost."""
     for k in range(uv.shape[1]):
         miss = np.flatnonzero(~np.isfinite(uv[:, k, 0]))
         if len(miss):
@@ -478,7 +484,6 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list):
                          f"{_runs_text(miss)} (occluded, smeared or out of view): NaN there, "
                          "not interpolated")
     notes.append("targets: " + ", ".join(f"target{k}={roles.kind[k]}" for k in range(uv.shape[1])))
-    return roles, uv, sigma_px, stab
 
 
 def _reference(uv, body) -> int:
@@ -706,11 +711,16 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     roles, uv, sigma_px, stab = _roles(uv, tt, config, notes)
     d = roles.direction
     ref = _reference(uv, roles.body)
-    roles = _rolling_hubs(roles, uv, sigma_px, tt, ref, fps, notes)
+    try:
+        approach = _approach(uv, sigma_px, roles, ref, fps)
+    except VideoError as why:  # the hubs are then not checked, nor the scale taken from them
+        approach = why
+    roles = _rolling_hubs(roles, tt, approach, notes)
+    _say_targets(uv, roles, notes)
     if est is None:
-        est = _scale_from_hubs(uv, sigma_px, roles, ref, fps, car, lens, where, notes)
+        est = _scale_from_hubs(uv, sigma_px, roles, approach, car, lens, where, notes)
     else:
-        est = _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, ref, fps, car, where, notes)
+        est = _tape_checked_by_hubs(est, uv, sigma_px, tt, roles, approach, fps, car, where, notes)
     s, s_sig = est.m_per_px, est.sigma
     cg_uv, cg_src, sil = _cg(film, uv, tt, roles, ref, car, est, notes)
     p = _pose(uv, sigma_px, roles.body, cg_uv, ref, d, s, fps, notes)
