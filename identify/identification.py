@@ -225,10 +225,13 @@ def _std_entry(fr: FitResult, name: str) -> dict:
     """A fitted quantity's standard deviations: ``std`` (what to quote), and its two parts,
     the data's ``std_data`` and the model's own error ``std_model`` (``identify.fitting.model_error``),
     which holds ``model_choice_shift`` when discovery's mechanisms moved the parameter
-    (``identify.discover.loop.with_model_choice``)."""
+    (``identify.discover.loop.with_model_choice``); ``std_model_measured`` says where that
+    error was measured when a regime's, not the clean worlds' (``FitResult.model_error_where``)."""
     entry = {"std": fr.std[name], "std_data": fr.std_data.get(name, fr.std[name]), "std_model": fr.std_model.get(name, 0.0)}
     if name in fr.model_choice:
         entry["model_choice_shift"] = fr.model_choice[name]
+    if name in fr.model_error_where:
+        entry["std_model_measured"] = fr.model_error_where[name]
     return entry
 
 

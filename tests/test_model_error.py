@@ -148,3 +148,53 @@ def test_calibrating_one_kind_of_recording_keeps_the_other_kinds_table():
     doc = model_error_tables(rows, before)
     assert doc["tables"]["sensors"] == before["tables"]["sensors"]
     assert doc["tables"]["film"]["relative"]["k_compression"] == pytest.approx(0.05, rel=1e-4)
+
+
+def test_a_regimes_error_replaces_the_clean_worlds_where_larger_and_says_where_it_was_measured():
+    from identify.fitting.model_error import REAR_LIFTED
+
+    lifted = ModelError(relative={"k_compression": 0.05}, absolute={"dz_contact": 0.15}, source="8 lifting worlds")
+    t = ModelError(relative={"k_compression": 0.1}, absolute={"dz_contact": 0.04}, source="clean",
+                   regimes={REAR_LIFTED: lifted})
+    values = {"k_compression": 1e6, "dz_contact": -0.2}
+    here, where = t.in_regimes((REAR_LIFTED,), values)
+    assert here.std("dz_contact", -0.2) == 0.15 and here.std("k_compression", 1e6) == pytest.approx(1e5)
+    assert list(where) == ["dz_contact"] and "rear wheels lift" in where["dz_contact"] and "8 lifting worlds" in where["dz_contact"]
+    for regimes in ((), ("a regime nobody measured",)):
+        same, where = t.in_regimes(regimes, values)
+        assert same.std("dz_contact", -0.2) == 0.04 and where == {}
+
+
+def test_a_fit_is_in_the_rear_lifted_regime_when_its_model_lifts_the_rear_within_the_recording():
+    from types import SimpleNamespace
+
+    from identify.fitting.model_error import REAR_LIFTED, regimes_of
+
+    t = np.linspace(-0.02, 0.3, 321)
+    lifts_at_50ms = SimpleNamespace(t=t, rear_margin=np.where(t > 0.05, -0.01, 0.02))
+    assert regimes_of(lifts_at_50ms, 0.3) == (REAR_LIFTED,)
+    assert regimes_of(lifts_at_50ms, 0.04) == ()  # the recording ends before the lift
+    assert regimes_of(SimpleNamespace(t=t, rear_margin=np.full(t.shape, 0.02)), 0.3) == ()
+
+
+def test_a_regimes_table_is_measured_on_the_worlds_whose_fitted_model_is_in_it():
+    base = CALIBRATION_SEED_BASE
+    lift = dict(model_rear_lift_ms=40.0, format="film")
+    rows = [dict(_row(base, effect="rear_axle_lift", dz_contact=(-0.2, 0.12, 1e-9), k_compression=(2e6, 100.0, 1e-9)),
+                 **lift),
+            dict(_row(base + 1, dz_contact=(-0.2, -0.12, 1e-9)), **lift),       # clean, its model lifting
+            dict(_row(base + 2, effect="rear_axle_lift", dz_contact=(-0.2, 0.5, 1e-9)), format="film",
+                 model_rear_lift_ms=None),                                        # its model never lifts
+            dict(_row(base + 3, effect="stiffness_zone", dz_contact=(-0.2, 0.5, 1e-9)), **lift)]
+    before = {"tables": {"film": {"relative": {"k_compression": 0.1}, "absolute": {"dz_contact": 0.04}, "source": "old"}}}
+    doc = model_error_tables(rows, before)["tables"]["film"]
+    lifted = doc["regimes"]["rear_lifted"]
+    assert lifted["absolute"]["dz_contact"] == pytest.approx(0.12, rel=1e-4) and lifted["seeds"] == [base, base + 1]
+    assert "lifts the rear wheels" in lifted["source"]
+    assert "k_compression" not in lifted["relative"]  # a regime's table: the parameters the regime acts on
+    # the clean worlds' table from the clean world among the rows
+    assert doc["absolute"]["dz_contact"] == pytest.approx(0.12, rel=1e-4) and doc["seeds"] == [base + 1]
+    # rows of the regime alone keep the clean worlds' table as it was
+    doc = model_error_tables([rows[0]], before)["tables"]["film"]
+    assert doc["absolute"] == {"dz_contact": 0.04} and doc["source"] == "old" and "rear_lifted" in doc["regimes"]
+    assert table("film").regimes["rear_lifted"].absolute["dz_contact"] > table("film").absolute["dz_contact"]

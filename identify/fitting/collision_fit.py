@@ -34,7 +34,7 @@ import optimistix as optx
 
 from identify.errors import UserError
 from identify.recordings.measurement import Measurement
-from identify.fitting.model_error import ModelError, kind_of
+from identify.fitting.model_error import ModelError, kind_of, regimes_of
 from identify.fitting.model_error import table as model_error_table
 from identify.fitting.least_squares import (
     channel_residuals,
@@ -166,6 +166,9 @@ class FitResult:
         model_std that estimate's std with the model's own error, model_std_data without;
         held_at, held_std: the measurement and that estimate combined, where it was held
         (``FitOptions.contact_from_motion``; without, at the measurement).
+    model_error_where : name -> where its ``std_model`` was measured, for the parameters whose
+        model error is a regime's (``identify.fitting.model_error.REGIMES``: the fitted model
+        lifts the rear wheels within the recording) rather than the clean worlds'.
     converged : the best start converged; starts_at_best : how many starts reached it;
     other_minima : costs of distinct worse minima found.
     params, speed, contact_time : the fitted model (sim.Params, m/s, s).
@@ -204,6 +207,7 @@ class FitResult:
     sigma_widened: dict[str, float] = dataclasses.field(default_factory=dict)
     model_choice: dict[str, float] = dataclasses.field(default_factory=dict)
     held_measured: dict[str, dict] = dataclasses.field(default_factory=dict)
+    model_error_where: dict[str, str] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -703,7 +707,11 @@ def fit(
 
     names = tuple(p.name for p in free)
     std_data = dict(zip(names, map(float, unc.std)))
-    std, std_model = error_table.covering(values, std_data)
+    # the model's own error where the fitted model runs (the rear lifted, or not) within the recording
+    t_end = max(float(measurement.t[measurement.valid(c)].max()) for c in fitted_channels) - float(contact_time)
+    regimes = regimes_of(traj, t_end)
+    here, model_error_where = error_table.in_regimes(regimes, values)
+    std, std_model = here.covering(values, std_data)
     result = FitResult(
         names=names,
         units={p.name: p.unit for p in free},
@@ -733,6 +741,7 @@ def fit(
         sigma_widened={g: float(f) for g, f in widen.items() if f > 1.0},
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
         held_measured=held_measured,
+        model_error_where={n: w for n, w in model_error_where.items() if n in names},
     )
     result.identified = {**assess_identifiability(result, fitted_channels),
                          **log_scale_identifiability(free, result.values, result.std, result.std_data, result.std_model)}
@@ -766,9 +775,11 @@ def log_scale_identifiability(free, values: dict, std: dict, std_data: dict | No
     return out
 
 
-def model_error_reason(value: float, std_data: float, std_model: float, kind: str) -> str:
+def model_error_reason(value: float, std_data: float, std_model: float, kind: str, where: str = "") -> str:
     """Why a parameter is not identified when the model's own error ``std_model``
-    (``identify.fitting.model_error``) outweighs the data's ``std_data``, else ''."""
+    (``identify.fitting.model_error``) outweighs the data's ``std_data``, else ''; ``where``:
+    the regime that error was measured in (``FitResult.model_error_where``), when not the
+    clean worlds'."""
     if not std_model > std_data:
         return ""
 
@@ -779,7 +790,7 @@ def model_error_reason(value: float, std_data: float, std_model: float, kind: st
         return f"{pct:.0f} %" if pct >= 10 else f"{pct:.2g} %"
 
     return (f"the model's own error ({size(std_model)}) outweighs the data's ({size(std_data)}): on recordings the"
-            " model did not make, its simplifications moved this parameter that far")
+            " model did not make, its simplifications moved this parameter that far" + (f"; {where}" if where else ""))
 
 
 def spread_of(name: str, value: float, sd: float) -> float:
@@ -812,7 +823,8 @@ def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool,
         if spread <= limit:
             out[name] = (True, "")
             continue
-        reason = model_error_reason(value, result.std_data.get(name, sd), result.std_model.get(name, 0.0), kind)
+        reason = model_error_reason(value, result.std_data.get(name, sd), result.std_model.get(name, 0.0), kind,
+                                    result.model_error_where.get(name, ""))
         if not reason and name in ("k_restitution", "restitution"):
             tr = result.trajectory
             stopped = np.flatnonzero(np.asarray(tr.vx) <= 0.0)
