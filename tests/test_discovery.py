@@ -146,8 +146,11 @@ def test_a_force_no_candidate_has_is_reported_unexplained(a4, unexplained_case):
     assert "an unexplained force" in [a.label for a in result.alternatives]
     moved = result.final.model_choice
     assert moved["k_compression"] < 0.03 * result.final.values["k_compression"] and moved["restitution"] < 0.01
-    assert all(result.final.identified[n][0] for n in ("k_compression", "restitution", "dz_contact")), \
-        result.final.identified
+    assert all(result.final.identified[n][0] for n in ("k_compression", "restitution")), result.final.identified
+    # the contact height is not identified for the model's own error where the rear lifts
+    # (the paper's model lifts it at 38 ms), not for the force
+    ok, why = result.final.identified["dz_contact"]
+    assert not ok and "rear wheels lifting" in why and "did not adopt" not in why, why
 
 
 def test_result_entries_follow_the_interface_and_are_json(block_case):
