@@ -708,8 +708,7 @@ def fit(
     names = tuple(p.name for p in free)
     std_data = dict(zip(names, map(float, unc.std)))
     # the model's own error where the fitted model runs (the rear lifted, or not) within the recording
-    t_end = max(float(measurement.t[measurement.valid(c)].max()) for c in fitted_channels) - float(contact_time)
-    regimes = regimes_of(traj, t_end)
+    regimes = regimes_of(traj, recorded_after_contact(measurement, fitted_channels, float(contact_time)))
     here, model_error_where = error_table.in_regimes(regimes, values)
     std, std_model = here.covering(values, std_data)
     result = FitResult(
@@ -800,6 +799,12 @@ def spread_of(name: str, value: float, sd: float) -> float:
     return sd / abs(value) if kind == "relative" and value != 0 else sd
 
 
+def recorded_after_contact(measurement: Measurement, channels, contact_time: float) -> float:
+    """s after first contact (``contact_time``, s on the measurement's clock) of the last
+    sample of ``channels`` the measurement has: how far into the crash it sees."""
+    return max(float(measurement.t[measurement.valid(c)].max()) for c in channels) - contact_time
+
+
 def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool, str]]:
     """Say, for each collision parameter, whether the data constrain it, and if not why.
 
@@ -810,9 +815,7 @@ def assess_identifiability(result: FitResult, channels) -> dict[str, tuple[bool,
     from sim import events_ms
 
     ev = events_ms(result.trajectory)
-    m = result.measurement
-    last = max(float(m.t[m.valid(c)].max()) for c in channels)
-    t_end_ms = (last - result.contact_time) * 1e3
+    t_end_ms = recorded_after_contact(result.measurement, channels, result.contact_time) * 1e3
     names = list(result.names)
     out = {}
     for name, (kind, limit) in NOT_IDENTIFIED.items():

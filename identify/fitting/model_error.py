@@ -71,10 +71,10 @@ class ModelError:
                 continue
             for name in (*other.relative, *other.absolute):
                 if name in values and other.std(name, values[name]) > self.std(name, values[name]):
+                    src, dst = (other.relative, relative) if name in other.relative else (other.absolute, absolute)
                     relative.pop(name, None)
                     absolute.pop(name, None)
-                    (relative if name in other.relative else absolute)[name] = (
-                        other.relative[name] if name in other.relative else other.absolute[name])
+                    dst[name] = src[name]
                     where[name] = f"that error measured with {REGIMES[regime]} ({other.source.split(' (')[0]})"
         return dataclasses.replace(self, relative=relative, absolute=absolute, regimes={}), where
 
@@ -99,11 +99,11 @@ REGIMES = {REAR_LIFTED: "the rear wheels lifting, as they do in this fit within 
 
 def regimes_of(trajectory, t_end_s: float) -> tuple[str, ...]:
     """The :data:`REGIMES` a fitted model is in: ``trajectory`` (``sim`` output, model time
-    from first contact, s) up to ``t_end_s`` (s after first contact: the recording's end)."""
-    t = np.asarray(trajectory.t)
-    margin = np.asarray(trajectory.rear_margin)
-    lifted = bool(np.any((margin < 0.0) & (t >= 0.0) & (t <= t_end_s)))
-    return (REAR_LIFTED,) if lifted else ()
+    from first contact, s) up to ``t_end_s`` (s after first contact: the recording's end).
+    The lift is ``sim.outputs.rear_wheel_lift_time``, as result.json's model events give it."""
+    from sim.outputs import rear_wheel_lift_time
+
+    return (REAR_LIFTED,) if float(rear_wheel_lift_time(trajectory)) <= t_end_s else ()
 
 
 def kind_of(measurement) -> str:
