@@ -20,8 +20,11 @@ farther away shows it short of the face (the nose passes in front of it and stop
 Only where the face stands short of the column the depth direction vanishes to (a camera
 looking back at the face) does a nearer edge show short of the face, and hide the nose
 before it touches: a stop at an edge of frame 0 is not taken there. The front end is found
-against the background as it was in frame 0, before the car got there
-(:func:`front_column`), so wall texture and the barrier's own edges do not count.
+against the background as the film's first frames show it (each pixel's median over
+:data:`BACKGROUND_FRAMES`), ahead of where the car stood in them (:func:`front_column`), so
+wall texture and the barrier's own edges do not count, nor the blocks of a first frame
+coded before the video's rate control settled; and in the nose's rows where the car stands
+out of that background (a floor or a wall as grey as the body hides it in the others).
 
 Positions are image px (undistorted, with the camera shake taken out, as the body pose);
 times s on the film's clock (0 at frame 0).
@@ -64,6 +67,9 @@ LEVEL_BEFORE_S = 0.020
 WINDOW_AFTER_S = 0.015
 #: Frames the visible front end must be followed on each side of the stop.
 MIN_FRAMES_EACH_SIDE = 4
+#: The background the front end is told from: each pixel's median over this many of the
+#: film's first frames (odd; the car's nose in the middle one is where it stood in them).
+BACKGROUND_FRAMES = 3
 #: Frames before and after a candidate stop that judge it.
 FRAMES_BEFORE = 10
 FRAMES_AFTER = 6
@@ -78,9 +84,12 @@ MAX_OUTLIER_SHARE = 0.25
 #: How much better (chi-square) a stop must explain the front end than no stop at all.
 MIN_CHI2_GAIN = 25.0
 #: The car's front must differ from the background by this many times the noise, and
-#: by at least CONTRAST_MIN grey levels, to be seen stopping.
+#: by at least CONTRAST_MIN grey levels, to be seen stopping ...
 CONTRAST_NOISES = 3.0
 CONTRAST_MIN = 6.0
+#: ... in at least this many of the nose's rows: the rows where it does not (the car as
+#: grey as the floor or the wall behind it there) are left out of the front end.
+MIN_CONTRAST_ROWS = 3
 #: Floor of a seen contact's one-sigma, in frame intervals. On the reference world's films
 #: (development seeds 960000-960039, which no test and no benchmark scores) the contact was
 #: seen on 24 at 1000 fps: within 0.3 ms of the truth on 20, and -0.82, +0.50, +1.04 and
@@ -426,8 +435,13 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     tip, after the contact. With ``row_lag_px`` the stop is taken back by that distance
     along the rigid front end's path (:func:`back_to_the_tip`).
 
-    The background is frame 0, where the car has not yet reached the columns searched
-    (frames whose search would reach back to the nose's place in frame 0 are skipped).
+    The background is each pixel's median over the film's first :data:`BACKGROUND_FRAMES`
+    frames, where the car has not yet reached the columns searched in more than half of
+    them (frames whose search would reach back to the nose's place in the middle one are
+    skipped); the front end is
+    followed in the nose's rows where the car differs from it by :data:`CONTRAST_NOISES`
+    times the noise and :data:`CONTRAST_MIN` grey levels, at least :data:`MIN_CONTRAST_ROWS`
+    of them.
 
     Parameters
     ----------
@@ -480,16 +494,25 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     def to_raw(i, p):
         return raw_points(to_pose, i, p)
 
-    if not np.isfinite(pose.point[0, 0]):
-        return not_seen("the car's pose is not measured in frame 0, whose picture is the background")
-    background = to_gray(frame_at(0))
+    # the background: each pixel's median over the film's first frames (a video's first
+    # frame, coded before its rate control settles, can be blocky where the next ones are
+    # not). Ahead of where the car's nose stood in the middle one, the car covers a pixel in
+    # fewer than half of them: the median there is the background
+    j_last = min(BACKGROUND_FRAMES, n) - 1
+    j0 = j_last // 2
+    if not np.isfinite(pose.point[j0, 0]):
+        return not_seen(f"the car's pose is not measured in frame {j0}, whose picture is part of the background")
     idx = np.arange(i0, i1 + 1)
-    # the window's frames read once, in order (a video is decoded from its start again
-    # whenever a frame before the last one read is asked for)
-    cache = {int(i): frame_at(int(i)) for i in idx}
+    # the frames read once, in order (a video is decoded from its start again whenever a
+    # frame before the last one read is asked for)
+    cache = {}
+    for i in [*range(j_last + 1), *idx]:
+        if i not in cache:
+            cache[int(i)] = frame_at(int(i))
     frame_at = cache.__getitem__
+    background = np.median([to_gray(frame_at(j)) for j in range(j_last + 1)], axis=0)
     v0, v1 = sorted(rows_ref)
-    nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
+    nose0 = to_raw(j0, pose.transform(j0, nose_ref[None]))[0]
     # the picture's front against the outline's nose (a vehicle file's outline or CG may
     # stand a few cm off the car's), once, in the first frame where the car has left its
     # place in frame 0 far enough; the nose is moved by it
@@ -501,7 +524,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         return not_seen(located)
     if abs(located) > NOSE_OFF_PX:  # within it the search's margins hold the front
         nose_ref = nose_ref + np.array([located, 0.0])
-        nose0 = to_raw(0, pose.transform(0, nose_ref[None]))[0]
+        nose0 = to_raw(j0, pose.transform(j0, nose_ref[None]))[0]
     placed = [(k, int(i)) + _nose_in_frame(pose, i, nose_ref, (v0, v1), to_pose)
               for k, i in enumerate(idx) if np.isfinite(pose.point[i, 0])]
     # the car's own difference from the background just behind its front, and the
@@ -511,21 +534,26 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     first = next((p for p in placed if d * (p[3][0] - nose0[0]) >= 2.0 * search_px + 2.0
                   and p[1] >= near[0]), None)
     if first is None:
-        return not_seen(f"the car does not move {2.0 * search_px + 2.0:g} px from where it stood in frame 0 "
+        return not_seen(f"the car does not move {2.0 * search_px + 2.0:g} px from where it stood in frame {j0} "
                         f"within frames {idx[0]}-{idx[-1]}: no background to see its front against")
     _, i, nose, raw, rows, shift = first
     gray = _frame_against(frame_at, i, background, rows, raw[0] + d * (search_px + 2.0), d, shift)
     behind = _band(raw[0] - d * np.arange(4.0, 16.0), rows)
     ahead = _band(raw[0] + d * np.arange(3.0, 9.0), rows)
-    level = float(np.nanmedian(np.abs(sample(gray, behind) - sample(background, behind - shift))))
+    row_level = _row_median(np.abs(sample(gray, behind) - sample(background, behind - shift)))
     noise = 1.4826 * float(np.nanmedian(np.abs(sample(gray, ahead) - sample(background, ahead - shift))))
-    if not (np.isfinite(level) and np.isfinite(noise)):
+    if not (np.isfinite(row_level).any() and np.isfinite(noise)):
         return not_seen(f"the car's front is not in the picture in frame {i}")
-    if not level > max(CONTRAST_NOISES * noise, CONTRAST_MIN):
-        return not_seen(f"the car's front differs from the background by {level:.1f} grey levels "
-                        f"(noise {noise:.1f}): too little to see it stop")
-    threshold = 0.5 * level
     min_contrast = max(CONTRAST_NOISES * noise, CONTRAST_MIN)
+    told = row_level > min_contrast
+    if told.sum() < MIN_CONTRAST_ROWS:
+        return not_seen(f"the car's front differs from the background by {float(np.nanmedian(row_level)):.1f} "
+                        f"grey levels (noise {noise:.1f}), by more than {min_contrast:.1f} in {int(told.sum())} "
+                        f"of its {len(rows)} rows in frame {i}: too little to see it stop")
+    level = float(np.median(row_level[told]))
+    threshold = 0.5 * level
+    # the rows where the car stands out of the background, as offsets in the reference frame
+    told_ref = rows[told] - (nose[1] - nose_ref[1])
     u_rigid = np.full(len(idx), np.nan)
     # the front end per frame, its sigma and how far the rows that showed it stand behind
     # the tip (px): as the rows' most forward share shows it, and as their median does
@@ -535,10 +563,11 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     last = None  # the last frame where the front end was found
     for k, i, nose, raw, rows, shift in placed:
         u_rigid[k] = nose[0]
+        band, rows = rows, _rows_told(rows, nose[1] - nose_ref[1], told_ref)
         moved = d * (raw[0] - nose0[0])
         if moved < 2.0 * FRAME0_CLEAR_PX:
-            continue  # the front end may still stand where the car stood in frame 0
-        # from ahead of where the car stood in frame 0 (the background behind that shows
+            continue  # the front end may still stand where the car stood in the background's frames
+        # from ahead of where the car stood in the background's frames (the background behind that shows
         # the car) to a little ahead of the rigid front end: the visible front end is the
         # most forward column that differs from the background
         u_from = nose0[0] + d * min(search_px + 2.0, 0.5 * moved)
@@ -556,7 +585,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
             if np.isfinite(lags).any():
                 # the rows that stand for the front: their lags at the same quantile
                 lag_q[k] = float(np.nanquantile(lags, 1.0 - q))
-        last = (int(i), gray, rows, shift, float(nose[1]))
+        last = (int(i), gray, rows, band, shift, float(nose[1]))
     u_seen, s_seen, lag = series[FORWARD_QUANTILE]
     found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
     ahead_px, late_s = 0.0, 0.0
@@ -594,7 +623,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         return not_seen(f"the front end does not stop in frames {i0}-{i1}{which} (chi-square gain {gain:.1f})")
     # a stop where the car would not have stood out of the background had it gone on (the
     # car as grey as the barrier it passes in front of) cannot be told from passing on
-    i_last, gray, rows, shift, v_nose = last
+    i_last, gray, rows, band, shift, v_nose = last
     stop_raw = to_raw(i_last, np.array([[stop_u, v_nose]]))[0, 0]
     car = np.nanmedian(sample(gray, _band(stop_raw - d * np.arange(2.0, 7.0), rows)), axis=1)
     beyond = np.nanmedian(sample(background, _band(stop_raw + d * np.arange(2.0, 9.0), rows) - shift), axis=1)
@@ -608,11 +637,11 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     # shows short of the face there); beyond that column the nearer edge shows beyond the
     # face and a farther one is drawn behind the car, so a stop at an edge there is the
     # face in the car's plane. A textured background's edges do not run on.
-    tall = np.arange(max(rows[0] - 2 * len(rows), 2), min(rows[-1] + 2 * len(rows), background.shape[0] - 3) + 1)
+    tall = np.arange(max(band[0] - 2 * len(band), 2), min(band[-1] + 2 * len(band), background.shape[0] - 3) + 1)
     step = (np.nanmedian(sample(background, _band(stop_raw + d * np.arange(2.0, 7.0), tall) - shift), axis=1)
             - np.nanmedian(sample(background, _band(stop_raw - d * np.arange(2.0, 7.0), tall) - shift), axis=1))
     step = step[np.isfinite(step)]
-    at_edge = len(step) >= len(rows) and max(np.mean(step > threshold), np.mean(step < -threshold)) >= EDGE_ROWS_SHARE
+    at_edge = len(step) >= len(band) and max(np.mean(step > threshold), np.mean(step < -threshold)) >= EDGE_ROWS_SHARE
     margin = VANISH_MARGIN * background.shape[1]
     if at_edge and not (vanish_u is not None and d * (stop_u - vanish_u) > margin):
         where = ("not well beyond the column the depth direction vanishes to" if vanish_u is not None
@@ -700,10 +729,12 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
                   search_px) -> float | str:
     """The column shift (px, pose coordinates) from the outline's nose to the picture's
     front end: in the first frame of ``idx`` where the nose has moved at least
-    ``2 * search_px + 4`` px from frame 0, the end of the run of
-    columns that differ from frame 0, searched from half-way between the nose's place in
-    frame 0 and now (columns the car covers in this frame and did not in frame 0) up to
-    :data:`LOCATE_PX` ahead. A sentence saying why when it cannot be found."""
+    ``2 * search_px + 4`` px from ``nose0`` (its place in the background's middle frame), the
+    end of the run of columns that differ from the background, searched from half-way
+    between ``nose0`` and now (columns the car covers in this frame and did not there) up to
+    :data:`LOCATE_PX` ahead, in the rows where the car differs from the background by more
+    than :data:`CONTRAST_MIN` (at least :data:`MIN_CONTRAST_ROWS`). A sentence saying why
+    when it cannot be found."""
     from .calibrate_profile import sample
 
     for i in idx:
@@ -720,16 +751,20 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
         if not np.isfinite(diff).any():
             return (f"the nose, placed from the CG and the scale, falls outside the picture in frame {i} "
                     "(or the camera's shake there is not measured)")
-        level = float(np.nanmedian(diff))
-        if not level > CONTRAST_MIN:
-            return (f"the car's front differs from the background by {level:.1f} grey levels in frame {i}: "
+        row_level = _row_median(diff)
+        told = row_level > CONTRAST_MIN
+        if told.sum() < MIN_CONTRAST_ROWS:
+            return (f"the car's front differs from the background by {float(np.nanmedian(diff)):.1f} grey levels "
+                    f"in frame {i}, by more than {CONTRAST_MIN:g} in {int(told.sum())} of its {len(rows)} rows: "
                     "too little to see it stop")
-        front = FrontEndDetector(background, rows, mid, raw[0] + d * LOCATE_PX, 0.5 * level, shift).detect(gray)
+        level = float(np.median(row_level[told]))
+        front = FrontEndDetector(background, rows[told], mid, raw[0] + d * LOCATE_PX, 0.5 * level,
+                                 shift).detect(gray)
         if not len(front):
             return (f"the car's front end not found in frame {i} within {LOCATE_PX:g} px ahead of the "
                     "vehicle outline's nose")
         return float(to_pose(i, np.array([[front.found[0], nose[1]]]))[0, 0] - nose[0])
-    return (f"the car does not move {2 * search_px + 4:g} px from where it stood in frame 0 within frames "
+    return (f"the car does not move {2 * search_px + 4:g} px from where it stood in the first frames within frames "
             f"{idx[0]}-{idx[-1]} around the deceleration onset: no background to see its front against")
 
 
@@ -745,6 +780,24 @@ def _nose_in_frame(pose: BodyPose, i: int, nose_ref: np.ndarray, rows_ref: tuple
     rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
     shift = to_pose(0, raw[None])[0] - to_pose(i, raw[None])[0]
     return nose, raw, rows, shift
+
+
+def _row_median(diff: np.ndarray) -> np.ndarray:
+    """Each row's median of a band of differences (R, U), NaN for a row without one."""
+    diff = np.asarray(diff, float)
+    ok = np.isfinite(diff).any(axis=1)
+    out = np.full(len(diff), np.nan)
+    out[ok] = np.nanmedian(diff[ok], axis=1)
+    return out
+
+
+def _rows_told(rows: np.ndarray, dv: float, told_ref: np.ndarray) -> np.ndarray:
+    """The rows of a frame's nose band (px) that stand, moved back by the nose's rise
+    ``dv`` (px) since the reference frame, within half a row of one of ``told_ref`` (the
+    reference frame's rows where the car stands out of the background)."""
+    rows = np.asarray(rows, float)
+    near = np.abs((rows - dv)[:, None] - np.asarray(told_ref, float)[None, :]).min(axis=1) <= 0.5
+    return rows[near]
 
 
 def _frame_against(frame_at, i: int, background: np.ndarray, rows: np.ndarray, ratio_from: float,
