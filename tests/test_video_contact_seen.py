@@ -168,6 +168,16 @@ def test_debris_joined_to_the_front_in_a_third_of_the_rows_does_not_move_the_con
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
 
 
+def test_debris_joined_to_the_front_in_most_rows_brackets_the_contact():
+    # rows 20-51 of 20-60 show the fragment from the frame after the stop (frame 21): their
+    # median too stops where the fragment stands, 1.8 frames late; the fragment came with the
+    # contact, which lies between the last frame the front moved with the cell (20) and 21
+    seen = _see_drawn(0.024, debris_rows=slice(20, 52), bg=np.full((80, 300), 60.0))
+    assert seen.kind == "seen" and "the contact lies between the last frame" in seen.note
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+    assert abs(seen.time_s - 0.0204) <= seen.sigma_s
+
+
 @pytest.mark.parametrize("median_says", ["no clean stop", "no gain"])
 def test_debris_with_no_clean_stop_in_the_median_rows_widens_the_sigma(monkeypatch, median_says):
     # the median rows showing no clean stop, or a "stop" that explains them no better than

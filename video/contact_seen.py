@@ -603,7 +603,20 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         by_median = stop_time(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
         if by_median is not None and by_median[3] < MIN_CHI2_GAIN and found is not None:
             by_median = None  # the median rows do not stop: as if no clean stop
-        if by_median is not None or found is None:
+        last_moving = (None if by_median is None or found is None or not by_median[0] > t_ahead + 1.0 / fps
+                       else _last_moving(t[idx], u_rigid, u_seen, s_seen, t_ahead))
+        if last_moving is not None:
+            # what joined the front reached its median rows too, which stop after the first
+            # frame that showed it; it came with the contact: the contact lies between the
+            # last frame where the front moved with the cell and that one
+            ts = 0.5 * (last_moving + t_ahead)
+            stop_u = float(np.interp(ts, t[idx][np.isfinite(u_rigid)], u_rigid[np.isfinite(u_rigid)])
+                           + np.median((u_seen - u_rigid)[np.isfinite(u_seen) & (t[idx] <= last_moving)]))
+            found = (ts, (t_ahead - last_moving) / np.sqrt(12.0), stop_u, by_median[3], by_median[4])
+            joined = (f"{stood}, and in their median too, which stopped {(by_median[0] - t_ahead) * 1e3:.2f} ms after "
+                      f"the first frame that showed it: the contact lies between the last frame where the front "
+                      f"moved with the cell ({last_moving * 1e3:.2f} ms) and that one ({t_ahead * 1e3:.2f} ms)")
+        elif by_median is not None or found is None:
             u_seen, s_seen, lag = median
             found = by_median
         else:
@@ -689,6 +702,21 @@ def _joined_ahead(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma:
     ahead = direction * (u_seen - u_rigid - c)
     bad = inside & (t >= ts - JOINED_FRAMES * dt) & (ahead > OUTLIER * sigma + 1.0)
     return (float(np.max(ahead[bad])), float(t[bad][0])) if bad.any() else (0.0, float("nan"))
+
+
+def _last_moving(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+                 t_ahead: float) -> float | None:
+    """The last frame before ``t_ahead`` where the seen front end stood where the rigidly
+    carried one puts it (within :data:`OUTLIER` sigmas and a pixel of the offset the
+    :data:`FRAMES_BEFORE` frames before show), s; None when no frame did."""
+    dt = float(np.median(np.diff(t)))
+    ok = np.isfinite(u_seen) & np.isfinite(u_rigid) & (t < t_ahead - 0.5 * dt)
+    pre = ok & (t >= t_ahead - FRAMES_BEFORE * dt)
+    if not pre.any():
+        return None
+    c = float(np.median(u_seen[pre] - u_rigid[pre]))
+    moving = ok & (np.abs(u_seen - u_rigid - c) <= OUTLIER * sigma + 1.0)
+    return float(t[moving][-1]) if moving.any() else None
 
 
 def back_to_the_tip(t: np.ndarray, u_rigid: np.ndarray, direction: int, ts: float, lag_px: float) -> float:
