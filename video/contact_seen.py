@@ -438,10 +438,9 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     The background is each pixel's median over the film's first :data:`BACKGROUND_FRAMES`
     frames, where the car has not yet reached the columns searched in more than half of
     them (frames whose search would reach back to the nose's place in the middle one are
-    skipped); the front end is
-    followed in the nose's rows where the car differs from it by :data:`CONTRAST_NOISES`
-    times the noise and :data:`CONTRAST_MIN` grey levels, at least :data:`MIN_CONTRAST_ROWS`
-    of them.
+    skipped); the front end is followed in the nose's rows where the car differs from it by
+    :data:`CONTRAST_NOISES` times the noise and :data:`CONTRAST_MIN` grey levels, at least
+    :data:`MIN_CONTRAST_ROWS` of them.
 
     Parameters
     ----------
@@ -515,7 +514,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     nose0 = to_raw(j0, pose.transform(j0, nose_ref[None]))[0]
     # the picture's front against the outline's nose (a vehicle file's outline or CG may
     # stand a few cm off the car's), once, in the first frame where the car has left its
-    # place in frame 0 far enough; the nose is moved by it
+    # place in the background's frames far enough; the nose is moved by it
     near = idx[idx >= int(np.floor((guess_s - LEVEL_BEFORE_S) * fps))]
     if not len(near):
         return not_seen("too few frames around the deceleration onset")
@@ -567,9 +566,9 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         moved = d * (raw[0] - nose0[0])
         if moved < 2.0 * FRAME0_CLEAR_PX:
             continue  # the front end may still stand where the car stood in the background's frames
-        # from ahead of where the car stood in the background's frames (the background behind that shows
-        # the car) to a little ahead of the rigid front end: the visible front end is the
-        # most forward column that differs from the background
+        # from ahead of where the car stood there (the background behind that shows the
+        # car) to a little ahead of the rigid front end: the visible front end is the most
+        # forward column that differs from the background
         u_from = nose0[0] + d * min(search_px + 2.0, 0.5 * moved)
         gray = _frame_against(frame_at, i, background, rows, raw[0] + d * (search_px + 2.0), d, shift)
         front = FrontEndDetector(background, rows, u_from, raw[0] + d * search_px, threshold, shift,
@@ -792,7 +791,7 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
             return (f"the car's front end not found in frame {i} within {LOCATE_PX:g} px ahead of the "
                     "vehicle outline's nose")
         return float(to_pose(i, np.array([[front.found[0], nose[1]]]))[0, 0] - nose[0])
-    return (f"the car does not move {2 * search_px + 4:g} px from where it stood in the first frames within frames "
+    return (f"the car does not move {2 * search_px + 4:g} px from where it stood at the film's start within frames "
             f"{idx[0]}-{idx[-1]} around the deceleration onset: no background to see its front against")
 
 
