@@ -595,6 +595,15 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         stood = (f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car can "
                  "be (debris, or something else joined to it)")
         joined = f"{stood}: the rows' median front is followed" if ahead_px else ""
+        first_median = None if ahead_px else stop_time(t[idx], u_rigid, *series[0.5][:2], 0.02 / fps)
+        if (first_median is not None and first_median[3] >= MIN_CHI2_GAIN
+                and first_median[0] < found[0] - max(1.0 / fps, 3.0 * np.hypot(found[1], first_median[1]))):
+            # the rows' median, which stands behind the tip and stops after it, stopped
+            # first: the most forward rows went on past where the front stood (debris
+            # joined to them short of where the cell's nose is by then)
+            joined = (f"; the rows' median front stopped {(found[0] - first_median[0]) * 1e3:.2f} ms before their "
+                      "most forward ones, which went on past where it stood (debris, or something else joined "
+                      "to them): the median is followed")
     if joined:
         # something joined the front in its most forward rows, ahead of where the car
         # can be (debris flung towards the camera shows beyond the face): the median row
