@@ -587,6 +587,8 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         last = (int(i), gray, rows, band, shift, float(nose[1]))
     u_seen, s_seen, lag = series[FORWARD_QUANTILE]
     found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
+    median = series[0.5]
+    by_median = stop_time(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
     ahead_px, late_s = 0.0, 0.0
     if found is None:
         joined = "; the rows' median front is followed, their most forward ones showing no clean stop"
@@ -595,20 +597,17 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         stood = (f"; in a frame the front's most forward rows stood {ahead_px:.1f} px ahead of where the car can "
                  "be (debris, or something else joined to it)")
         joined = f"{stood}: the rows' median front is followed" if ahead_px else ""
-        first_median = None if ahead_px else stop_time(t[idx], u_rigid, *series[0.5][:2], 0.02 / fps)
-        if (first_median is not None and first_median[3] >= MIN_CHI2_GAIN
-                and first_median[0] < found[0] - max(1.0 / fps, 3.0 * np.hypot(found[1], first_median[1]))):
+        if (not ahead_px and by_median is not None and by_median[3] >= MIN_CHI2_GAIN
+                and by_median[0] < found[0] - max(1.0 / fps, 3.0 * np.hypot(found[1], by_median[1]))):
             # the rows' median, which stands behind the tip and stops after it, stopped
             # first: the most forward rows went on past where the front stood (debris
             # joined to them short of where the cell's nose is by then)
-            joined = (f"; the rows' median front stopped {(found[0] - first_median[0]) * 1e3:.2f} ms before their "
+            joined = (f"; the rows' median front stopped {(found[0] - by_median[0]) * 1e3:.2f} ms before their "
                       "most forward ones, which went on past where it stood (debris, or something else joined "
                       "to them): the median is followed")
     if joined:
         # something joined the front in its most forward rows, ahead of where the car
         # can be (debris flung towards the camera shows beyond the face): the median row
-        median = series[0.5]
-        by_median = stop_time(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
         if by_median is not None and by_median[3] < MIN_CHI2_GAIN and found is not None:
             by_median = None  # the median rows do not stop: as if no clean stop
         last_moving = (None if by_median is None or found is None or not by_median[0] > t_ahead + 1.0 / fps
@@ -703,13 +702,21 @@ def _joined_ahead(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma:
     dt = float(np.median(np.diff(t)))
     inside = (t >= ts - FRAMES_BEFORE * dt) & (t < ts + FRAMES_AFTER * dt) & np.isfinite(u_seen) \
         & np.isfinite(u_rigid)
-    pre = inside & (t < ts)
-    if not pre.any():
+    c = _offset_before(t, u_rigid, u_seen, ts)
+    if c is None:
         return 0.0, float("nan")
-    c = float(np.median(u_seen[pre] - u_rigid[pre]))
     ahead = direction * (u_seen - u_rigid - c)
     bad = inside & (t >= ts - JOINED_FRAMES * dt) & (ahead > OUTLIER * sigma + 1.0)
     return (float(np.max(ahead[bad])), float(t[bad][0])) if bad.any() else (0.0, float("nan"))
+
+
+def _offset_before(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, t_ref: float) -> float | None:
+    """Where the seen front end stood against the rigidly carried one in the
+    :data:`FRAMES_BEFORE` frames before ``t_ref`` (s): their median offset, px; None when
+    neither was measured in any of them."""
+    dt = float(np.median(np.diff(t)))
+    pre = np.isfinite(u_seen) & np.isfinite(u_rigid) & (t >= t_ref - FRAMES_BEFORE * dt) & (t < t_ref)
+    return float(np.median(u_seen[pre] - u_rigid[pre])) if pre.any() else None
 
 
 def _last_moving(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
@@ -718,11 +725,10 @@ def _last_moving(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: 
     carried one puts it (within :data:`OUTLIER` sigmas and a pixel of the offset the
     :data:`FRAMES_BEFORE` frames before show), s; None when no frame did."""
     dt = float(np.median(np.diff(t)))
-    ok = np.isfinite(u_seen) & np.isfinite(u_rigid) & (t < t_ahead - 0.5 * dt)
-    pre = ok & (t >= t_ahead - FRAMES_BEFORE * dt)
-    if not pre.any():
+    c = _offset_before(t, u_rigid, u_seen, t_ahead)
+    if c is None:
         return None
-    c = float(np.median(u_seen[pre] - u_rigid[pre]))
+    ok = np.isfinite(u_seen) & np.isfinite(u_rigid) & (t < t_ahead - 0.5 * dt)
     moving = ok & (np.abs(u_seen - u_rigid - c) <= OUTLIER * sigma + 1.0)
     return float(t[moving][-1]) if moving.any() else None
 
