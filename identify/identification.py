@@ -77,6 +77,7 @@ def car_geometry_of(vehicle):
         cg_to_front_axle=float(vehicle.cg_to_front_axle),
         silhouette_side=np.asarray(vehicle.silhouette_side, float),
         windscreen_top=np.asarray(vehicle.windscreen_top if vehicle.windscreen_top else (np.nan, np.nan), float),
+        mass=float(vehicle.mass),
     )
 
 

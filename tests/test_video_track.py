@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from identify.errors import UserError
 from identify.recordings.synthetic import car_geometry
 from video.errors import VideoError
 from video.io import frame_noise_sigma
@@ -24,6 +25,8 @@ from video.motion import (
     impact_speed,
     lift_time,
     rigid_fit,
+    touchdown_time,
+    tyre_unloading_m,
 )
 from synth.render import Renderer
 from synth.scene import Effects, Motion, Occluder, Scene, default_camera, default_tapes, \
@@ -60,7 +63,12 @@ def crash_motion(car, n_pre=30, n_post=90, frac=0.0, omega=24.0, lift_acc=60.0, 
         return car.cg_height + z - (px - car.x_cg) * np.sin(pitch) \
             + (r - car.cg_height) * np.cos(pitch)
 
-    lift = np.where(t > T_LIFT, 0.5 * lift_acc * (t - T_LIFT) ** 2, 0.0)
+    # the rear tyre (250 kN/m) unloads over the 30 ms before it leaves the floor: its centre
+    # rises by the static deflection, then goes on up with the lift's acceleration
+    defl = car.static_wheel_load("rear") / 250e3
+    rise = np.clip((t - T_LIFT + 0.03) / 0.03, 0.0, 1.0) ** 2 * defl
+    tau = np.maximum(t - T_LIFT, 0.0)
+    lift = rise + 2 * defl / 0.03 * tau + 0.5 * lift_acc * tau**2
     return Motion(t=t, x=x, z=z, pitch=pitch, front_wheel_angle=front, rear_wheel_angle=roll,
                   front_wheel_dz=r - axle_z(car.front_axle_x),
                   rear_wheel_dz=r + lift - axle_z(car.rear_axle_x))
@@ -116,7 +124,7 @@ def match_targets(tracks, truth, meta):
     return out
 
 
-def check_film(tracks, truth, meta, centre_rms_px):
+def check_film(tracks, truth, meta, car, centre_rms_px):
     cf = meta["contact_frame"]
     # contact frame and clock
     assert abs(tracks.contact_frame - cf) <= 1
@@ -161,7 +169,12 @@ def check_film(tracks, truth, meta, centre_rms_px):
     spin_true = truth["front_wheel_angle_rad"] - truth["front_wheel_angle_rad"][0]
     assert np.sqrt(np.nanmean((spin - spin_true) ** 2)) < 0.02
     assert tracks.events_ms["front_wheel_block"] == pytest.approx(T_BLOCK * 1e3 - t0_ms, abs=2.0)
-    assert tracks.events_ms["rear_wheel_lift"] == pytest.approx(T_LIFT * 1e3 - t0_ms, abs=2.0)
+    # the lift lies where the hub rose through a tyre's possible static deflection: the
+    # middle of that bracket, within its half-width of the truth
+    earliest, latest = (np.interp(d, truth["rear_wheel_height_m"], truth["t_s"]) * 1e3 - t0_ms
+                        for d in tyre_unloading_m(car.static_wheel_load("rear")))
+    assert tracks.events_ms["rear_wheel_lift"] == pytest.approx(0.5 * (earliest + latest), abs=1.0)
+    assert abs(tracks.events_ms["rear_wheel_lift"] - (T_LIFT * 1e3 - t0_ms)) < 0.5 * (latest - earliest)
     assert "front_wheel_lift" not in tracks.events_ms
     assert "rear_wheel_block" not in tracks.events_ms
     # the sub-frame contact instant
@@ -179,7 +192,7 @@ def test_clean_film_left_to_right(clean_film):
     car, film, truth, meta = clean_film
     tracks = track_film(film, car)
     assert tracks.direction == 1
-    check_film(tracks, truth, meta, centre_rms_px=0.1)
+    check_film(tracks, truth, meta, car, centre_rms_px=0.1)
 
 
 @pytest.mark.slow
@@ -190,7 +203,7 @@ def test_noisy_blurred_flickering_film_right_to_left_between_frames():
                                direction=-1, effects=effects)
     tracks = track_film(film, car)
     assert tracks.direction == -1
-    check_film(tracks, truth, meta, centre_rms_px=0.3)
+    check_film(tracks, truth, meta, car, centre_rms_px=0.3)
 
 
 def test_occluded_target_is_reported_lost_not_invented():
@@ -380,10 +393,51 @@ def test_block_and_lift_times_between_frames():
     assert got == pytest.approx(tb, abs=0.002)
     tl = 0.0687
     h = np.where(t > tl, 30.0 * (t - tl) ** 2, 0.0) + rng.normal(0, 2e-4, len(t))
-    got = lift_time(t, h, np.full_like(t, 2e-4), 0.0, fps)
-    assert got == pytest.approx(tl, abs=0.002)
+    got = lift_time(t, h, np.full_like(t, 2e-4), 0.0, fps)  # a rigid tyre: the lift is the rise's start
+    assert got.time_s == pytest.approx(tl, abs=0.002) and got.sigma_s == 0.0
     assert block_time(t, rolling, s, rolling, 0.0, fps) is None  # a rolling wheel
     assert lift_time(t, np.zeros_like(t), np.full_like(t, 2e-4), 0.0, fps) is None
+
+
+def test_static_wheel_loads_share_the_weight_by_the_cg():
+    """The A4 (1670 kg, CG 1.18 m behind the front axle of 2.808 m): its rear wheels carry
+    1.18 / 2.808 of the weight, each half of it; a vehicle file without a mass is refused."""
+    vehicle = tomllib.loads((ROOT / "data" / "vehicles" / "audi_a4.toml").read_text())
+    car = car_geometry(vehicle)
+    assert car.static_wheel_load("rear") == pytest.approx(0.5 * 9.81 * 1670 * 1.18 / 2.808)
+    assert 2 * (car.static_wheel_load("front") + car.static_wheel_load("rear")) == pytest.approx(9.81 * 1670)
+    with pytest.raises(UserError, match="'mass' is missing .*kilograms"):
+        car_geometry({k: v for k, v in vehicle.items() if k != "mass"})
+
+
+def test_lift_and_touchdown_bracketed_by_the_tyre_deflection():
+    """A tyre (deflection 12 mm) unloading from 20 ms, leaving the floor at 50 ms, landing
+    again: each event bracketed where the hub passes through the 7-18 mm a tyre could
+    deflect, and a hub that rises by the unloading alone is not seen to leave the floor."""
+    fps = 1000.0
+    t = np.arange(-0.02, 0.30, 1 / fps)
+    defl, t_lift = 0.012, 0.050
+    rise = np.clip((t - 0.020) / 0.030, 0.0, 1.0) ** 2 * defl
+    tau = np.maximum(t - t_lift, 0.0)
+    h = rise + 0.8 * tau - 8.0 * tau**2  # up at 0.8 m/s, back down after 100 ms
+    h = np.maximum(h, np.where(t > t_lift + 0.1, 0.0, -np.inf))
+    sig = np.full_like(t, 3e-4)
+    noisy = h + np.random.default_rng(3).normal(0, 3e-4, len(t))
+    bounds = (0.007, 0.018)
+    lift = lift_time(t, noisy, sig, 0.0, fps, unloading_m=bounds)
+    cross = [t[np.argmax(h > d)] for d in bounds]  # the frames where the hub rises through each bound
+    assert lift.earliest_s == pytest.approx(cross[0], abs=1.5e-3)
+    assert lift.latest_s == pytest.approx(cross[1], abs=1.5e-3)
+    assert lift.earliest_s < t_lift < lift.latest_s
+    assert lift.sigma_s == pytest.approx((lift.latest_s - lift.earliest_s) / np.sqrt(12))
+    down = touchdown_time(t, noisy, sig, lift.latest_s, fps, unloading_m=bounds)
+    after = t > t_lift + 0.05
+    falls = [t[after][np.argmax(h[after] < d)] for d in bounds[::-1]]
+    assert down.earliest_s == pytest.approx(falls[0], abs=1.5e-3)
+    assert down.latest_s == pytest.approx(falls[1], abs=1.5e-3)
+    # the unloading alone (the centre up 12 mm, less than the most a tyre can deflect)
+    assert lift_time(t, rise + np.random.default_rng(4).normal(0, 3e-4, len(t)), sig, 0.0, fps,
+                     unloading_m=bounds) is None
 
 
 def test_block_of_a_wheel_slowed_by_the_crush_with_a_noisy_hub_angle():
@@ -429,8 +483,14 @@ def test_film_of_a_simulated_crash(identified_run, tmp_path):
     pitch_err = np.degrees(tracks.channels["pitch_rad"] - truth["pitch_rad"])
     assert np.sqrt(np.nanmean(pitch_err**2)) < 0.2
     assert tracks.impact_speed_mps == pytest.approx(56.3 / 3.6, rel=0.005)
+    # the model's wheel is rigid (its axle spring stands for suspension and tyre): its hub
+    # rises from the lift on, so the film, which allows for a tyre's deflection, puts the
+    # lift after the model's, where the hub has risen through that deflection
     lift = events_ms(identified_run)["rear_wheel_lift"]
-    assert tracks.events_ms["rear_wheel_lift"] == pytest.approx(lift, abs=2.0)
+    least, most = tyre_unloading_m(car.static_wheel_load("rear"))
+    t_ms = truth["t_s"] * 1e3 - truth["t_s"][tracks.contact_frame] * 1e3
+    bracket = [np.interp(d, truth["rear_wheel_height_m"][t_ms > lift], t_ms[t_ms > lift]) for d in (least, most)]
+    assert lift < tracks.events_ms["rear_wheel_lift"] == pytest.approx(np.mean(bracket), abs=1.5)
     assert "front_wheel_block" not in tracks.events_ms
 
 

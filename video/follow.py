@@ -84,6 +84,10 @@ class TrackerConfig:
     correct_yaw : bool
         Take a camera yawed against the car's plane out of every point, measured from the
         tapes' segments (``video.calibrate_perspective``); off only to measure what it does.
+    tyre_deflection : bool
+        Allow for the tyre's unknown static deflection when a wheel leaves or meets the
+        floor (``video.motion.lift_time``: the event bracketed); off only to measure what
+        it does (the lift at the hub's first rise, as a rigid tyre would have it).
     """
 
     search_px: float = 8.0
@@ -98,6 +102,7 @@ class TrackerConfig:
     see_contact: bool = True
     hub_scale: bool = True
     correct_yaw: bool = True
+    tyre_deflection: bool = True
 
 
 @dataclass(frozen=True)

@@ -51,6 +51,9 @@ __all__ = [
     "kink_time",
     "block_time",
     "unblock_time",
+    "TYRE_STIFFNESS_N_PER_M",
+    "tyre_unloading_m",
+    "FloorEvent",
     "lift_time",
     "touchdown_time",
     "crush_from_pose",
@@ -824,27 +827,71 @@ def unblock_time(t: np.ndarray, spin: np.ndarray, spin_sigma: np.ndarray, rollin
     return tu
 
 
-def lift_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_from: float, fps: float,
-              min_lift_m: float = 0.002) -> float | None:
-    """When a wheel leaves the floor (after ``t_from``), s; None if it stays down.
+#: Vertical stiffness of a passenger car's radial tyre, N/m (low, high): a wheel of 35-50 kg
+#: on 90-390 kN/m has the 8-14 Hz wheel-hop frequency of passenger cars. A wheel still on the
+#: floor rises as its tyre unloads, by its static deflection, load / stiffness, and leaves
+#: the floor when it has risen that far.
+TYRE_STIFFNESS_N_PER_M = (150e3, 400e3)
 
-    First guess: the first frame after ``t_from`` from which the wheel centre stays
-    higher than ``max(min_lift_m, 5 sigma)`` above the floor for 5 frames. Refined by
+
+def tyre_unloading_m(static_load_n: float) -> tuple[float, float]:
+    """How far a wheel's centre rises before its tyre leaves the floor, m (least, most): the
+    static deflection under ``static_load_n`` (N) of the stiffest and the softest tyre of
+    :data:`TYRE_STIFFNESS_N_PER_M`."""
+    lo_k, hi_k = TYRE_STIFFNESS_N_PER_M
+    return float(static_load_n) / hi_k, float(static_load_n) / lo_k
+
+
+@dataclass(frozen=True)
+class FloorEvent:
+    """A wheel seen leaving the floor or landing on it again (:func:`lift_time`,
+    :func:`touchdown_time`), bracketed in time because its tyre's deflection is not known, s.
+
+    earliest_s, latest_s : the bracket (see each function for what bounds it).
+    time_s, sigma_s : the event as the bracket's middle, and its one-sigma (the bracket's
+        width over sqrt(12): anywhere in it alike).
+    """
+
+    earliest_s: float
+    latest_s: float
+
+    @property
+    def time_s(self) -> float:
+        return 0.5 * (self.earliest_s + self.latest_s)
+
+    @property
+    def sigma_s(self) -> float:
+        return (self.latest_s - self.earliest_s) / np.sqrt(12.0)
+
+
+def lift_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_from: float, fps: float,
+              unloading_m: tuple[float, float] = (0.0, 0.0), min_lift_m: float = 0.002) -> FloorEvent | None:
+    """When a wheel leaves the floor (after ``t_from``), s, bracketed; None if it is not seen to.
+
+    A wheel's centre rises before the wheel leaves the floor: its tyre unloads as the car
+    pitches, and lets go when the centre has risen by the tyre's static deflection, which
+    the film does not show; ``unloading_m`` (least, most), m, bounds it
+    (:func:`tyre_unloading_m`; on reference-world films the rear hub rose 12 mm over the
+    40 ms before its tyre left the floor). The bracket (:class:`FloorEvent`): from the
+    later of the rise's start and the centre's rising through the least deflection, to its
+    rising through the most (staying above it by 2 sigma for 5 frames), each interpolated
+    between two frames; a centre that never rises through the most is not seen to leave the
+    floor (None). ``(0, 0)``: a rigid tyre, the lift at the rise's start.
+
+    The rise's start: the first frame after ``t_from`` from which the wheel centre stays
+    higher than ``max(min_lift_m, 5 sigma)`` above the floor for 5 frames, refined by
     fitting ``h = a + b tau``, ``a + c tau^2`` or ``a + b tau + c tau^2``, ``tau = max(0,
-    t - tl)``, on a 0.02-frame grid, the one with the least BIC: a wheel leaves the floor
-    with a jump of its upward speed (it goes on with the body's axle, the suspension at
-    full extension), of its upward acceleration (the suspension's pull), or both.
+    t - tl)``, on a 0.02-frame grid, the one with the least BIC: the centre starts up with
+    a jump of its upward speed, of its upward acceleration, or both.
     """
     ok = _finite(height, sigma)
     i = np.flatnonzero(ok & (t >= t_from))
     if len(i) < 8:
         return None
-    thr = np.maximum(min_lift_m, 5 * sigma[i])
-    up = height[i] > thr
-    k = np.flatnonzero(np.convolve(up.astype(int), np.ones(5, int), mode="valid") == 5)
-    if len(k) == 0:
+    k = _first_run(height[i] > np.maximum(min_lift_m, 5 * sigma[i]))
+    if k is None:
         return None
-    guess = t[i[k[0]]]
+    guess = t[i[k]]
     dt = 1.0 / fps
     sel = ok & (t >= max(t_from - 10 * dt, guess - 40 * dt)) & (t <= guess + 8 * dt)
     ts, ys, ss = t[sel], height[sel], sigma[sel]
@@ -865,33 +912,81 @@ def lift_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_from: floa
     _, chi0 = _linear_fit(np.ones((len(ts), 1)), ys, ss)  # on the floor throughout
     if model(ts[-1:], tb)[0, 1:] @ coef[1:] <= 0 or chi0 - chi < MIN_EVENT_CHI2:
         return None
-    return tb
+    least, most = unloading_m
+    j = np.flatnonzero(ok & (t >= tb))
+    latest = _rises_through(t[j], height[j], most, height[j] - 2 * sigma[j]) if most > 0 else float(tb)
+    if latest is None:
+        return None
+    earliest = _rises_through(t[j], height[j], least) if least > 0 else None
+    earliest = float(tb) if earliest is None else max(float(tb), earliest)
+    return FloorEvent(min(earliest, latest), max(latest, float(tb)))
 
 
-def touchdown_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_lift: float,
-                   fps: float, min_lift_m: float = 0.002) -> float | None:
-    """When a lifted wheel is back on the floor, s (first frame at or below the lift
-    threshold after having been above it), interpolated; None if it stays up."""
+def _rises_through(t: np.ndarray, height: np.ndarray, level: float, low: np.ndarray | None = None) -> float | None:
+    """When ``height`` rises through ``level`` for good: the first of 5 frames in a row whose
+    ``low`` (default: the height itself) stands above it, the crossing interpolated between
+    the frame before and that one; None if it never does."""
+    k = _first_run((height if low is None else low) > level)
+    if k is None:
+        return None
+    if k > 0 and height[k - 1] < level < height[k]:
+        return float(t[k - 1] + (level - height[k - 1]) / (height[k] - height[k - 1]) * (t[k] - t[k - 1]))
+    return float(t[k])
+
+
+def _first_run(flags: np.ndarray, run: int = 5) -> int | None:
+    """Index of the first of ``run`` consecutive True values of ``flags``, or None."""
+    k = np.flatnonzero(np.convolve(np.asarray(flags, int), np.ones(run, int), mode="valid") == run)
+    return int(k[0]) if len(k) else None
+
+
+def touchdown_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_lift: float, fps: float,
+                   unloading_m: tuple[float, float] = (0.0, 0.0), min_lift_m: float = 0.002) -> FloorEvent | None:
+    """When a lifted wheel is back on the floor (after ``t_lift``, s), bracketed; None if it
+    stays up. Its tyre touches the floor when its centre comes down to the tyre's static
+    deflection above the floor path, between the ``unloading_m`` bounds (least, most, m:
+    :func:`lift_time`): the earliest is the centre coming down through the most, the latest
+    through the least; with no least (a rigid tyre), the first frame at or below ``max(
+    min_lift_m, 5 sigma)`` after having been above it, the last descent extrapolated to the
+    floor path. Each crossing interpolated between the frames around it."""
     ok = _finite(height, sigma)
     i = np.flatnonzero(ok & (t > t_lift))
     if len(i) < 3:
         return None
-    thr = np.maximum(min_lift_m, 5 * sigma[i])
-    up = height[i] > thr
+    ti, hi = t[i], height[i]
+    least, most = unloading_m
+    if least > 0:
+        latest = _comes_down_through(ti, hi, least)
+    else:
+        b = _first_down(hi > np.maximum(min_lift_m, 5 * sigma[i]))
+        if b is None:
+            return None
+        h0, h1 = hi[b - 1], hi[b]
+        # the floor is where the height returns to zero: extrapolate the last descent
+        latest = float(ti[b - 1] + np.clip(h0 / (h0 - h1), 0.0, 1.5) * (ti[b] - ti[b - 1])) if h0 > h1 else float(ti[b])
+    if latest is None:
+        return None
+    earliest = _comes_down_through(ti, hi, most) if most > 0 else None
+    return FloorEvent(latest if earliest is None else min(earliest, latest), latest)
+
+
+def _comes_down_through(t: np.ndarray, height: np.ndarray, level: float) -> float | None:
+    """When ``height`` first comes down through ``level`` after having been above it,
+    interpolated; None if it never does."""
+    b = _first_down(height > level)
+    if b is None:
+        return None
+    h0, h1 = height[b - 1], height[b]
+    return float(t[b - 1] + (h0 - level) / (h0 - h1) * (t[b] - t[b - 1]))
+
+
+def _first_down(up: np.ndarray) -> int | None:
+    """Index of the first False of ``up`` after its first True (a coming down), or None."""
     if not up.any():
         return None
     first_up = int(np.flatnonzero(up)[0])
     down = np.flatnonzero(~up[first_up:])
-    if len(down) == 0:
-        return None
-    j = first_up + int(down[0])
-    a, b = i[j - 1], i[j]
-    # the floor is where the height returns to zero: extrapolate the last descent
-    h0, h1 = height[a], height[b]
-    if h0 > h1:
-        frac = np.clip(h0 / (h0 - h1), 0.0, 1.5)
-        return float(t[a] + frac * (t[b] - t[a]))
-    return float(t[b])
+    return first_up + int(down[0]) if len(down) else None
 
 
 # ------------------------------------------------------------------------- floor

@@ -114,24 +114,27 @@ def _drop_repeated_frames(tt: TargetTracks, duplicates, notes: list,
 
 
 def _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, axes, car, channels, sigma,
-            notes) -> dict:
+            notes, tyre_deflection: bool = True) -> tuple[dict, dict]:
     """Wheel spin angles and heights from the hub targets, their events (ms).
 
     Adds ``<front|rear>_wheel_angle_rad`` and ``<front|rear>_wheel_height_m`` (with
-    sigma) to ``channels``/``sigma`` and sentences to ``notes``; returns the events:
-    ``<wheel>_wheel_block``, ``_unblock``, ``_lift``, ``_touchdown`` in ms after contact.
+    sigma) to ``channels``/``sigma`` and sentences to ``notes``; returns the events,
+    ``<wheel>_wheel_block``, ``_unblock``, ``_lift``, ``_touchdown`` in ms after contact,
+    and the one-sigma of those bracketed (lift, touchdown), ms; ``tyre_deflection``
+    (``TrackerConfig``) False: a rigid tyre.
     """
-    from video.motion import (block_time, floor_heights, lift_time, to_car_plane,
-                              touchdown_time, unblock_time)
+    from video.motion import (TYRE_STIFFNESS_N_PER_M, block_time, floor_heights, lift_time, to_car_plane,
+                              touchdown_time, tyre_unloading_m, unblock_time)
 
     events: dict = {}
+    events_sigma: dict = {}
     kf, kr = roles.index("front_hub"), roles.index("rear_hub")
     hubs = [(w, k) for w, k in (("front", kf), ("rear", kr)) if k is not None]
     for which in ("front", "rear"):
         if which not in dict(hubs):
             notes.append(f"no {which} hub target: {which} wheel angle and height not measured")
     if not hubs:
-        return events
+        return events, events_sigma
     heights, _ = floor_heights([uv[:, k] for _, k in hubs], cf, s)
     for (which, k), h in zip(hubs, heights):
         hub_xz = to_car_plane(uv[:, k] - uv[ref, k], d, s, axes)
@@ -151,15 +154,27 @@ def _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, axes, car, channels, si
             tu = unblock_time(t, spin, a_sig, rolling, tb, fps)
             if tu is not None:
                 events[f"{which}_wheel_unblock"] = tu * 1e3
-        tl = lift_time(t, h, sh, 0.0, fps)
-        if tl is not None:
-            events[f"{which}_wheel_lift"] = tl * 1e3
-            td = touchdown_time(t, h, sh, tl, fps)
-            if td is not None:
-                events[f"{which}_wheel_touchdown"] = td * 1e3
+        least, most = unloading = tyre_unloading_m(car.static_wheel_load(which)) if tyre_deflection else (0.0, 0.0)
+        tyre = (f"{least * 1e3:.0f}-{most * 1e3:.0f} mm: {car.static_wheel_load(which):.0f} N on a tyre of"
+                f" {TYRE_STIFFNESS_N_PER_M[0] / 1e3:.0f}-{TYRE_STIFFNESS_N_PER_M[1] / 1e3:.0f} kN/m")
+        lift = lift_time(t, h, sh, 0.0, fps, unloading_m=unloading)
+        if lift is not None:
+            events[f"{which}_wheel_lift"], events_sigma[f"{which}_wheel_lift"] = lift.time_s * 1e3, lift.sigma_s * 1e3
+            notes.append(f"{which} wheel off the floor at {lift.time_s * 1e3:.1f} +- {lift.sigma_s * 1e3:.1f} ms:"
+                         f" between {lift.earliest_s * 1e3:.1f} and {lift.latest_s * 1e3:.1f} ms its hub rose through"
+                         f" its tyre's possible static deflection ({tyre}), where the tyre lets go")
+            down = touchdown_time(t, h, sh, lift.latest_s, fps, unloading_m=unloading)
+            if down is not None:
+                events[f"{which}_wheel_touchdown"] = down.time_s * 1e3
+                events_sigma[f"{which}_wheel_touchdown"] = down.sigma_s * 1e3
+                notes.append(f"{which} wheel back on the floor at {down.time_s * 1e3:.1f} +- {down.sigma_s * 1e3:.1f}"
+                             f" ms (between {down.earliest_s * 1e3:.1f} and {down.latest_s * 1e3:.1f} ms)")
+        elif np.nanmax(np.where(t > 0, h, np.nan), initial=-np.inf) > 0.002:
+            notes.append(f"{which} hub rose up to {np.nanmax(np.where(t > 0, h, np.nan)) * 1e3:.0f} mm, not beyond its"
+                         f" tyre's possible static deflection ({tyre}): not seen to leave the floor")
     notes.append("wheel heights: the hub centres' rise above the path they rolled along "
                  "before contact (the floor line, fitted in the image)")
-    return events
+    return events, events_sigma
 
 
 def _measured_geometry(uv, sigma_px, kf, kr, cf, s, s_sig, sil, car, hubs_measure: bool = True) -> dict:
@@ -729,8 +744,8 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     v_imp = _speed(p, x_fit, cf, s, s_sig, speed_mps, notes)
     channels, sigma = _channels(p, x_fit, tc, cf, s, s_sig, fps, car, notes)
     t = (np.arange(n) - cf) / fps
-    events = _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, p.axes, car, channels, sigma,
-                     notes)
+    events, events_sigma = _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, p.axes, car, channels, sigma,
+                                   notes, config.tyre_deflection)
     for k in range(len(first)):
         for axis, col in (("u", 0), ("v", 1)):
             channels[f"target{k}_{axis}_px"] = tt.uv[:, k, col]
@@ -747,7 +762,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
         "silhouette_px": None if sil is None else np.asarray(sil.polygon_px, float),
         "cg_uv": np.asarray(cg_uv, float),
     }
-    return Tracks(t=t, channels=channels, sigma=sigma, events_ms=events, contact_frame=cf,
+    return Tracks(t=t, channels=channels, sigma=sigma, events_ms=events, events_sigma_ms=events_sigma, contact_frame=cf,
                   fps=fps, scale_m_per_px=float(s), scale_sigma=float(s_sig),
                   impact_speed_mps=v_imp, direction=int(d), notes=notes,
                   contact_offset_s=float(tc - cf / fps), contact_sigma_s=tc_sigma, overlay=overlay,

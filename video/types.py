@@ -23,6 +23,8 @@ class CarGeometry:
         from the ground), m.
     windscreen_top : (2,) float64
         Vehicle-frame point of the roof edge at the top of the windscreen, m.
+    mass : float
+        Test mass, kg (the wheels' static loads: how far a tyre can unload).
     """
 
     length: float
@@ -34,6 +36,12 @@ class CarGeometry:
     cg_to_front_axle: float
     silhouette_side: np.ndarray
     windscreen_top: np.ndarray
+    mass: float
+
+    def static_wheel_load(self, which: str) -> float:
+        """N on one ``front`` or ``rear`` wheel of the car at rest on level ground."""
+        rear_share = self.cg_to_front_axle / self.wheelbase
+        return 0.5 * 9.81 * self.mass * (rear_share if which == "rear" else 1.0 - rear_share)
 
     @property
     def x_cg(self) -> float:
@@ -68,6 +76,9 @@ class Tracks:
         One-standard-deviation uncertainty per sample, same keys as ``channels``.
     events_ms : dict[str, float | None]
         Event times, ms after contact (``front_wheel_block`` ...).
+    events_sigma_ms : dict[str, float]
+        One-sigma of the events the film brackets rather than sees (a wheel's lift and
+        touchdown, ``video.motion.FloorEvent``), ms.
     contact_frame : int
         Index of the first frame in which the bumper touches the barrier face.
     fps : float
@@ -120,6 +131,7 @@ class Tracks:
     overlay: dict = field(default_factory=dict)
     geometry: dict = field(default_factory=dict)
     scale_source: str = "checker tape"
+    events_sigma_ms: dict = field(default_factory=dict)
 
     @property
     def contact_time_s(self) -> float:

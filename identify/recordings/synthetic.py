@@ -23,8 +23,13 @@ from identify.errors import UserError
 from sim._paths import VEHICLE_DIR
 from video.types import CarGeometry
 
-_GEOMETRY_KEYS = ("length", "height", "wheelbase", "front_overhang", "wheel_radius", "cg_height", "cg_to_front_axle")
+_GEOMETRY_KEYS = ("length", "height", "wheelbase", "front_overhang", "wheel_radius", "cg_height", "cg_to_front_axle",
+                  "mass")
 TRAJECTORY_FIELDS = ("t", "x", "z", "pitch", "crush", "front_wheel_angle", "rear_wheel_angle")
+
+
+def _unit(key: str) -> str:
+    return "kilograms" if key == "mass" else "metres"
 
 
 def car_geometry(vehicle: dict) -> CarGeometry:
@@ -48,13 +53,13 @@ def car_geometry(vehicle: dict) -> CarGeometry:
     values = {}
     for key in _GEOMETRY_KEYS:
         if key not in vehicle:
-            raise UserError(f"{name}: '{key}' is missing from the vehicle file; add it (metres)")
+            raise UserError(f"{name}: '{key}' is missing from the vehicle file; add it ({_unit(key)})")
         try:
             v = float(vehicle[key])
         except (TypeError, ValueError):
             raise UserError(f"{name}: '{key}' = {vehicle[key]!r} is not a number") from None
         if not np.isfinite(v) or v <= 0:
-            raise UserError(f"{name}: '{key}' = {v} must be a positive length in metres")
+            raise UserError(f"{name}: '{key}' = {v} must be positive ({_unit(key)})")
         values[key] = v
     sil = np.asarray(vehicle.get("silhouette_side", []), dtype=float)
     if sil.ndim != 2 or sil.shape[1] != 2 or sil.shape[0] < 3 or not np.all(np.isfinite(sil)):
