@@ -303,6 +303,45 @@ def _work(args):
     return run_world(*args)
 
 
+# A worker's compiled fits pile up over the worlds it runs (5.4 GB after 20 development worlds,
+# when LLVM then failed to allocate and the worker died): each worker runs at most this many
+MAX_WORLDS_PER_WORKER = 8
+# a world unfinished when a worker died (which one killed it cannot be told) is run again in a
+# fresh pool this many times, then is a crashed row
+WORKER_DEATHS_ALLOWED = 2
+
+
+def in_workers(plan: list, jobs: int):
+    """Rows of ``run_world`` over ``plan`` in ``jobs`` spawned processes, as they finish.
+
+    A worker that dies (killed for memory, a crash in compiled code) breaks the pool: the
+    worlds not finished then are run again in a fresh pool (a world whose worker died more
+    than ``WORKER_DEATHS_ALLOWED`` times is a row with status "crashed"), where a
+    ``multiprocessing.Pool`` waited for them for ever."""
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    pending, deaths = list(plan), {}
+    while pending:
+        with ProcessPoolExecutor(jobs, mp_context=mp.get_context("spawn"),
+                                 max_tasks_per_child=MAX_WORLDS_PER_WORKER) as pool:
+            futures = {pool.submit(_work, item): item for item in pending}
+            pending = []
+            for fut in as_completed(futures):
+                item = futures[fut]
+                try:
+                    yield fut.result()
+                except BrokenProcessPool:
+                    deaths[item[0]] = deaths.get(item[0], 0) + 1
+                    if deaths[item[0]] > WORKER_DEATHS_ALLOWED:
+                        yield {"seed": item[0], "effect": item[1], "format": item[2], "status": "crashed",
+                               "error": "its worker process died (out of memory, or a crash in compiled code)"}
+                    else:
+                        pending.append(item)
+        if pending:
+            print(f"a worker died: {len(pending)} world(s) run again in a fresh pool", file=sys.stderr, flush=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--n", type=int, default=40, help="number of worlds (default 40)")
@@ -350,11 +389,11 @@ def main(argv=None) -> int:
                 fh.write(json.dumps(row, default=float) + "\n")
 
     if a.jobs > 1:
-        with mp.get_context("spawn").Pool(a.jobs) as pool:
-            for row in pool.imap(_work, plan):
-                keep_row(row)
-                print(f"[{time.perf_counter() - t0:7.1f} s] world {row['seed']} {row['effect']}: {row['status']}",
-                      file=sys.stderr, flush=True)
+        for row in in_workers(plan, a.jobs):
+            keep_row(row)
+            print(f"[{time.perf_counter() - t0:7.1f} s] world {row['seed']} {row['effect']}: {row['status']}",
+                  file=sys.stderr, flush=True)
+        rows.sort(key=lambda r: r["seed"])
     else:
         for item in plan:
             keep_row(run_world(*item))

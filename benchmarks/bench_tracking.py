@@ -177,6 +177,9 @@ def main(argv=None) -> int:
         fmt = "{:.0f}" if key in ("films", "tracked", "scaled_from_hubs", "films_claiming_a_lift_that_did_not_happen") \
             or key.endswith("_films") else ("{:.2f}" if key.endswith("median") else "{:.0%}")
         print(f"| {key} | {fmt.format(shipped[key])} | {fmt.format(baseline[key])} |")
+    for name in ("shipped", "baseline"):
+        false = [f"{r['seed']} ({', '.join(r[name]['false_lifts'])})" for r in rows if r[name].get("false_lifts")]
+        print(f"{name}: films claiming a lift that did not happen: {', '.join(false) or 'none'}")
     print(f"\n{len(rows)} films in {time.perf_counter() - t0:.0f} s")
     return 0
 
