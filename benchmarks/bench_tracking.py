@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from accuracy import SEED_BASE, world_plan  # noqa: E402
 
-BASELINES = {"stabilise": {"stabilise": False}, "see_contact": {"see_contact": False},
+BASELINES = {"stabilise": {"stabilise": False}, "background_shake": {"background_shake": False}, "see_contact": {"see_contact": False},
              "hub_scale": {"hub_scale": False}, "correct_yaw": {"correct_yaw": False},
              "tyre_deflection": {"tyre_deflection": False}}  # TrackerConfig fields switched off in the baseline
 

@@ -71,8 +71,12 @@ class TrackerConfig:
     detect : TargetConfig
         Settings of the first frame's detection.
     stabilise : bool
-        Take a camera shaken by the impact out of the tracks with the fixed targets
+        Take a camera shaken by the impact out of the tracks, measured on the background
+        (``video.background_motion``) or with the fixed targets
         (``video.motion.stabilise_on_fixed``); off only to measure what it does.
+    background_shake : bool
+        Measure the shake on the background's corners before the fixed targets; off only to
+        measure what it does (the fixed targets alone).
     see_contact : bool
         Look for first contact in the picture, the front end stopping at the barrier
         (``video.contact_seen``); off only to measure what it does (the deceleration
@@ -99,6 +103,7 @@ class TrackerConfig:
     radius_tolerance: float = 0.25
     detect: TargetConfig = field(default_factory=TargetConfig)
     stabilise: bool = True
+    background_shake: bool = True
     see_contact: bool = True
     hub_scale: bool = True
     correct_yaw: bool = True

@@ -41,6 +41,7 @@ __all__ = [
     "rigid_fit",
     "Stabilised",
     "stabilise_on_fixed",
+    "take_out_camera_motion",
     "BodyPose",
     "body_pose",
     "cg_from_hubs",
@@ -329,12 +330,24 @@ def stabilise_on_fixed(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray) 
     # measure it poorly, and its error grows with the distance to every other target)
     use_roll = bool(np.max(np.nan_to_num(np.abs(roll) / roll_sig), initial=0.0) > SIGNIFICANT)
     roll = np.where(np.isfinite(roll) & use_roll, roll, 0.0)
-    out, sig = uv.copy(), sigma_px.copy()
+    return take_out_camera_motion(uv, sigma_px, shift, roll, centre, shift_sig,
+                                  np.nan_to_num(roll_sig) if use_roll else np.zeros(n))
+
+
+def take_out_camera_motion(uv: np.ndarray, sigma_px: np.ndarray, shift: np.ndarray, roll: np.ndarray,
+                           centre: np.ndarray, shift_sigma: np.ndarray, roll_sigma: np.ndarray) -> Stabilised:
+    """Target centres ``uv`` (n, K, 2) px as an unmoving camera would have seen them: in each
+    frame whose ``shift`` (n, 2) px is measured, the camera's motion (that shift of the
+    points measured, their centroid now at ``centre`` (n, 2), and a ``roll`` (n,) rad about
+    it) inverted and applied to every centre; ``sigma_px`` (n, K) with the correction's
+    noise added in quadrature (``shift_sigma`` (n,) px, and ``roll_sigma`` (n,) rad times the
+    distance from ``centre``). Frames with no shift measured are left as they are."""
+    out, sig = np.array(uv, float, copy=True), np.array(sigma_px, float, copy=True)
     for i in np.flatnonzero(np.isfinite(shift[:, 0])):
         rc = centre[i] - shift[i]
         out[i] = rc + (uv[i] - centre[i]) @ _rot(roll[i])  # R(roll)^-1 applied to each row
-        lever = np.hypot(*(uv[i] - centre[i]).T) if use_roll else 0.0
-        sig[i] = np.sqrt(sig[i] ** 2 + shift_sig[i] ** 2 + (np.nan_to_num(roll_sig[i]) * lever) ** 2)
+        lever = np.hypot(*(uv[i] - centre[i]).T)
+        sig[i] = np.sqrt(sig[i] ** 2 + shift_sigma[i] ** 2 + (roll_sigma[i] * lever) ** 2)
     return Stabilised(uv=out, sigma_px=sig, shift_px=shift, roll=roll)
 
 
