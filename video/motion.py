@@ -250,12 +250,25 @@ class Stabilised:
         NaN where no fixed target was seen.
     roll : (n,) float
         The camera's roll removed per frame, rad (0 with one fixed target).
+    centre_px : (n, 2) float
+        Where the points the motion was measured on had their centroid in each frame, px:
+        the roll turns about it (NaN where not measured).
     """
 
     uv: np.ndarray
     sigma_px: np.ndarray
     shift_px: np.ndarray
     roll: np.ndarray
+    centre_px: np.ndarray
+
+    def correct(self, i: int, points: np.ndarray) -> np.ndarray:
+        """Image points (M, 2) px of frame ``i`` as the unmoving camera would have seen them
+        (as they are where frame ``i``'s motion was not measured)."""
+        points = np.asarray(points, float)
+        if not np.isfinite(self.shift_px[i, 0]):
+            return points
+        c = self.centre_px[i]
+        return c - self.shift_px[i] + (points - c) @ _rot(self.roll[i])  # R(roll)^-1 applied to each row
 
 
 #: Fixed targets moving together by less than this are taken to stand still: no correction, px.
@@ -342,13 +355,13 @@ def take_out_camera_motion(uv: np.ndarray, sigma_px: np.ndarray, shift: np.ndarr
     it) inverted and applied to every centre; ``sigma_px`` (n, K) with the correction's
     noise added in quadrature (``shift_sigma`` (n,) px, and ``roll_sigma`` (n,) rad times the
     distance from ``centre``). Frames with no shift measured are left as they are."""
-    out, sig = np.array(uv, float, copy=True), np.array(sigma_px, float, copy=True)
+    motion = Stabilised(uv=np.array(uv, float, copy=True), sigma_px=np.array(sigma_px, float, copy=True),
+                        shift_px=shift, roll=roll, centre_px=centre)
     for i in np.flatnonzero(np.isfinite(shift[:, 0])):
-        rc = centre[i] - shift[i]
-        out[i] = rc + (uv[i] - centre[i]) @ _rot(roll[i])  # R(roll)^-1 applied to each row
+        motion.uv[i] = motion.correct(i, uv[i])
         lever = np.hypot(*(uv[i] - centre[i]).T)
-        sig[i] = np.sqrt(sig[i] ** 2 + shift_sigma[i] ** 2 + (roll_sigma[i] * lever) ** 2)
-    return Stabilised(uv=out, sigma_px=sig, shift_px=shift, roll=roll)
+        motion.sigma_px[i] = np.sqrt(sigma_px[i] ** 2 + shift_sigma[i] ** 2 + (roll_sigma[i] * lever) ** 2)
+    return motion
 
 
 def _rot(phi: float) -> np.ndarray:

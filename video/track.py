@@ -214,9 +214,7 @@ def _contact_in_picture(film, frame_t, pose, cg_uv, axes: np.ndarray, car: CarGe
 
     def to_pose(i: int, p: np.ndarray) -> np.ndarray:
         p = undistort_points(np.asarray(p, float), lens) if lens.corrected else np.asarray(p, float)
-        if stab is not None and np.isfinite(stab.shift_px[i, 0]):
-            p = p - stab.shift_px[i]
-        return p
+        return p if stab is None else stab.correct(i, p)
 
     placed = nose_in_picture(car, cg_uv, axes, s)
     if isinstance(placed, str):
