@@ -42,9 +42,9 @@ STILL_FRAMES = 15
 SATURATED = 250
 #: The frames are measured reduced this many times (a quarter of the pixels to follow the
 #: corners in: the shift of 300 corners is still known to a few hundredths of a pixel).
-REDUCE = 2
+REDUCE = 4
 #: Lucas-Kanade window and pyramid levels above the reduced image, px.
-WINDOW, LEVELS = (15, 15), 2
+WINDOW, LEVELS = (11, 11), 1
 
 
 @dataclass
@@ -186,7 +186,7 @@ def _level(rows: np.ndarray) -> tuple[float, float]:
 def _gray8(frame: np.ndarray) -> np.ndarray:
     """The frame as 8-bit grey (``video.targets.to_gray``'s [0, 1] scaled to 0-255; an 8-bit
     grey frame as it is), reduced :data:`REDUCE` times (pixel areas averaged)."""
-    frame = np.asarray(frame)
-    if not (frame.dtype == np.uint8 and frame.ndim == 2):
-        frame = np.clip(to_gray(frame) * 255.0 + 0.5, 0, 255).astype(np.uint8)
-    return cv2.resize(frame, None, fx=1 / REDUCE, fy=1 / REDUCE, interpolation=cv2.INTER_AREA)
+    small = cv2.resize(np.asarray(frame), None, fx=1 / REDUCE, fy=1 / REDUCE, interpolation=cv2.INTER_AREA)
+    if small.dtype == np.uint8 and small.ndim == 2:
+        return small
+    return np.clip(to_gray(small) * 255.0 + 0.5, 0, 255).astype(np.uint8)
