@@ -503,33 +503,29 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
     # the background only where no fixed target is in view: with one (or more) the fixed
     # targets measured the shake better on the development films (x RMS 0.38-1.17 mm against
     # 0.90-3.76 mm on 960016, 960026, 960032, 960039)
-    stab = bg.stabilise(uv, sigma_px) if bg is not None and not len(fixed) else None
-    if stab is not None:
-        uv, sigma_px = stab.uv, stab.sigma_px
-        worst = int(np.nanargmax(np.hypot(*stab.shift_px.T)))
-        unseen = np.flatnonzero(~np.isfinite(stab.shift_px[:, 0]))
-        notes.append(f"camera motion taken out of every track from {len(bg.ref)} corners of the background: up to "
-                     f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
-                     f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
-                     + (f"; not corrected in frame(s) {_runs_text(unseen)}, where too few of them were followed"
-                        if len(unseen) else ""))
-        return roles, uv, sigma_px, stab
-    stab = stabilise_on_fixed(uv, sigma_px, fixed) if config.stabilise else None
-    if stab is not None:
-        uv, sigma_px = stab.uv, stab.sigma_px
-        worst = int(np.nanargmax(np.hypot(*stab.shift_px.T)))
-        unseen = np.flatnonzero(~np.isfinite(stab.shift_px[:, 0]))
-        notes.append(f"camera motion taken out of every track from {len(fixed)} fixed target(s): up to "
-                     f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
-                     f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
-                     + (f"; not corrected in frame(s) {_runs_text(unseen)}, where no fixed target is seen"
-                        if len(unseen) else ""))
-    elif config.stabilise and not len(fixed):
-        notes.append("no fixed target (barrier, floor) in view, and the background's corners show no shake"
-                     if bg is not None and config.stabilise else
-                     "no fixed target (barrier, floor) in view: a camera shaken by the impact could not be "
+    if not config.stabilise:
+        return roles, uv, sigma_px, None
+    if len(fixed):
+        stab, source, lost = (stabilise_on_fixed(uv, sigma_px, fixed), f"{len(fixed)} fixed target(s)",
+                              "where no fixed target is seen")
+    elif bg is not None:
+        stab, source, lost = (bg.stabilise(uv, sigma_px), f"{len(bg.ref)} corners of the background",
+                              "where too few of them were followed")
+    else:
+        notes.append("no fixed target (barrier, floor) in view: a camera shaken by the impact could not be "
                      "taken out of the tracks")
-    return roles, uv, sigma_px, stab
+        return roles, uv, sigma_px, None
+    if stab is None:
+        if not len(fixed):
+            notes.append("no fixed target (barrier, floor) in view, and the background's corners show no shake")
+        return roles, uv, sigma_px, None
+    worst = int(np.nanargmax(np.hypot(*stab.shift_px.T)))
+    unseen = np.flatnonzero(~np.isfinite(stab.shift_px[:, 0]))
+    notes.append(f"camera motion taken out of every track from {source}: up to "
+                 f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
+                 f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
+                 + (f"; not corrected in frame(s) {_runs_text(unseen)}, {lost}" if len(unseen) else ""))
+    return roles, stab.uv, stab.sigma_px, stab
 
 
 def _say_targets(uv, roles, notes: list) -> None:
