@@ -36,9 +36,9 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from accuracy import SEED_BASE, world_plan  # noqa: E402
 
-BASELINES = {"stabilise": {"stabilise": False}, "background_shake": {"background_shake": False}, "see_contact": {"see_contact": False},
-             "hub_scale": {"hub_scale": False}, "correct_yaw": {"correct_yaw": False},
-             "tyre_deflection": {"tyre_deflection": False}}  # TrackerConfig fields switched off in the baseline
+# the baselines: each the TrackerConfig field of its name switched off
+BASELINES = {name: {name: False} for name in ("stabilise", "background_shake", "see_contact", "hub_scale",
+                                              "correct_yaw", "tyre_deflection")}
 
 
 def track_world(seed: int, effect: str, baseline: str) -> dict:

@@ -75,8 +75,8 @@ class TrackerConfig:
         (``video.background_motion``) or with the fixed targets
         (``video.motion.stabilise_on_fixed``); off only to measure what it does.
     background_shake : bool
-        Measure the shake on the background's corners before the fixed targets; off only to
-        measure what it does (the fixed targets alone).
+        With no fixed target in view, measure the shake on the background's corners; off
+        only to measure what it does (the fixed targets alone).
     see_contact : bool
         Look for first contact in the picture, the front end stopping at the barrier
         (``video.contact_seen``); off only to measure what it does (the deceleration

@@ -655,14 +655,12 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
         raise VideoError("the car does not move towards the barrier at the start of the film; "
                          "the film must begin before contact")
     # the deceleration persists (a repeated frame makes a dip of only ``lag`` samples)
-    below = (v < 0.98 * v0).astype(int)
-    run = 2 * lag
-    slow = np.flatnonzero(np.convolve(below, np.ones(run, int), mode="valid") == run)
-    if len(slow) == 0:
+    slow = _first_run(v < 0.98 * v0, 2 * lag)
+    if slow is None:
         raise VideoError("the car never decelerates in the film: no contact with the barrier "
                          "found; check that the film includes the impact")
     # v[j] is the speed between samples j and j + lag, centred at j + lag / 2
-    guess = tt[min(slow[0] + lag, len(tt) - 1)]
+    guess = tt[min(slow + lag, len(tt) - 1)]
     lo = guess - 0.03
     hi_fit = guess + window_after_s
     sel = (tt >= lo - 0.03) & (tt <= hi_fit)
@@ -945,7 +943,7 @@ def lift_time(t: np.ndarray, height: np.ndarray, sigma: np.ndarray, t_from: floa
         return None
     earliest = _rises_through(t[j], height[j], least) if least > 0 else None
     earliest = float(tb) if earliest is None else max(float(tb), earliest)
-    return FloorEvent(min(earliest, latest), max(latest, float(tb)))
+    return FloorEvent(min(earliest, latest), latest)
 
 
 def _rises_through(t: np.ndarray, height: np.ndarray, level: float, low: np.ndarray | None = None) -> float | None:

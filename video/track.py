@@ -154,8 +154,9 @@ def _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, axes, car, channels, si
             tu = unblock_time(t, spin, a_sig, rolling, tb, fps)
             if tu is not None:
                 events[f"{which}_wheel_unblock"] = tu * 1e3
-        least, most = unloading = tyre_unloading_m(car.static_wheel_load(which)) if tyre_deflection else (0.0, 0.0)
-        tyre = (f"{least * 1e3:.0f}-{most * 1e3:.0f} mm: {car.static_wheel_load(which):.0f} N on a tyre of"
+        load = car.static_wheel_load(which)
+        least, most = unloading = tyre_unloading_m(load) if tyre_deflection else (0.0, 0.0)
+        tyre = (f"{least * 1e3:.0f}-{most * 1e3:.0f} mm: {load:.0f} N on a tyre of"
                 f" {TYRE_STIFFNESS_N_PER_M[0] / 1e3:.0f}-{TYRE_STIFFNESS_N_PER_M[1] / 1e3:.0f} kN/m")
         lift = lift_time(t, h, sh, 0.0, fps, unloading_m=unloading)
         if lift is not None:
