@@ -15,6 +15,7 @@ from video.contact_seen import (
     SeenContact,
     back_to_the_tip,
     front_column,
+    noise_ahead,
     not_seen,
     outline_lag_m,
     raw_points,
@@ -340,6 +341,22 @@ def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping(
     # the car is followed on over the barrier's grey where it differs from it, and lost where
     # it does not: no stop is claimed at the barrier's edge
     assert seen.kind == "not_seen" and "does not stop" in seen.note
+
+
+def test_the_noise_ahead_of_the_front_is_the_backgrounds_not_the_moving_edges():
+    # the wall's blocks over the 10 px searched ahead of the moving front coded again (10
+    # grey levels from block to block), the background beyond them as it was (sensor noise 1)
+    rng = np.random.default_rng(6)
+    bg = _background()
+    front = 101.3
+    img = _with_car(bg, front) + rng.normal(0.0, 1.0, bg.shape)
+    blocks = rng.normal(0.0, 10.0, (bg.shape[0] // 4 + 1, 3))
+    img[:, 102:114] += np.kron(blocks, np.ones((4, 4)))[:bg.shape[0], :12]
+    rows = np.arange(5.0, 55.0)
+    assert noise_ahead(img, bg, front, rows, 1, 10.0, np.zeros(2)) == pytest.approx(1.0, abs=0.25)
+    # the picture's left to right: the same, mirrored
+    assert noise_ahead(img[:, ::-1], bg[:, ::-1], bg.shape[1] - 1 - front, rows, -1, 10.0,
+                       np.zeros(2)) == pytest.approx(1.0, abs=0.25)
 
 
 @pytest.mark.parametrize("vanish_u", [None, 60.0, 200.0])
