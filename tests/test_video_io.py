@@ -67,6 +67,34 @@ def test_iteration_yields_every_frame_as_random_access_reads_it(mp4):
         np.testing.assert_array_equal(rest[k - 1], film[k])
 
 
+def test_a_film_that_fits_in_memory_is_read_from_the_opening_scan_and_stays_as_decoded(mp4, monkeypatch):
+    import video.io
+
+    kept = open_film(mp4)
+
+    def no_decoding(*args):
+        raise AssertionError("decoded again")
+
+    monkeypatch.setattr(kept, "_open_capture", no_decoding)
+    monkeypatch.setattr(kept, "_read_video", no_decoding)
+    frames = list(kept)
+    # a film longer than the memory kept for it (five of its frames) is decoded again, to
+    # the same frames
+    monkeypatch.setattr(video.io, "KEEP_DECODED_BYTES", 5 * 320 * 160)
+    decoded = open_film(mp4)
+    assert len(frames) == len(decoded) == 12
+    for i in (7, 2, 11, 0):
+        np.testing.assert_array_equal(kept[i], decoded[i])
+    for a, b in zip(frames, decoded):
+        np.testing.assert_array_equal(a, b)
+    # every reader shares the frames kept: none can change them for the others
+    with pytest.raises(ValueError):
+        kept[3][0, 0] = 0
+    monkeypatch.setattr(decoded, "_read_video", no_decoding)
+    with pytest.raises(AssertionError, match="decoded again"):
+        decoded[4]
+
+
 def test_publication_rate_gets_a_note_and_fps_overrides_it(tmp_path):
     path = tmp_path / "published.mp4"
     write_film(renderer(6), path, container_fps=30.0)

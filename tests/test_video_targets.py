@@ -18,8 +18,10 @@ from video.targets import (
     detect_targets,
     orientation,
     refine_centre,
+    refine_centre_and_symmetry,
     refine_gradient,
     refine_symmetric,
+    symmetry_errors,
     to_gray,
 )
 
@@ -184,6 +186,21 @@ def test_refine_centre_starts_again_where_the_gradients_run_off():
     assert max(errs) < 0.05
 
 
+def test_the_symmetry_measured_on_the_way_is_that_of_the_centre_returned():
+    """The tracker checks a target's symmetry where ``refine_centre_and_symmetry`` measured
+    it on the way: at the centre it returns, whichever of its two refinements won."""
+    c = np.array([30.37, 29.81])
+    told = 0
+    for img in (draw_targets((60, 64), [c], [4.5], [0.4]), _smeared(c, 4.5, 2), _smeared(c, 4.5, 3)):
+        for s in _starts(c, off=1.2):
+            centre, errors = refine_centre_and_symmetry(img, s, 4.5)
+            np.testing.assert_array_equal(centre, refine_centre(img, s, 4.5))
+            if errors is not None:
+                told += 1
+                assert errors == symmetry_errors(img, centre, 4.5)
+    assert told >= 12
+
+
 def test_refine_symmetric_does_not_lock_to_pixels_on_a_sharp_target():
     """Bilinear samples of a sharp picture favour whole pixels (0.08 px on rendered films);
     sampled smoothed, the centre follows a target moved by tenths of a pixel."""
@@ -193,6 +210,19 @@ def test_refine_symmetric_does_not_lock_to_pixels_on_a_sharp_target():
         img = draw_targets((60, 64), [c], [6.0], [0.4])
         errs.append(np.hypot(*(refine_symmetric(img, c + [0.2, -0.1], 6.0) - c)))
     assert max(errs) < 0.03
+
+
+def test_the_two_parameter_step_is_least_squares_and_none_when_ill_conditioned():
+    from video.targets import _solve_normal
+
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        jac, rhs = rng.normal(size=(30, 2)), rng.normal(size=30)
+        np.testing.assert_allclose(_solve_normal(jac, rhs), np.linalg.lstsq(jac, rhs, rcond=None)[0], rtol=1e-9)
+    # a straight edge: every gradient along one line (condition number 1e10)
+    edge = np.column_stack([np.ones(30), np.ones(30) + 1e-5 * rng.normal(size=30)])
+    assert np.linalg.cond(edge.T @ edge) > 1e8 and _solve_normal(edge, rng.normal(size=30)) is None
+    assert _solve_normal(np.zeros((30, 2)), rng.normal(size=30)) is None
 
 
 def test_refine_symmetric_says_nan_on_a_flat_patch():

@@ -2,8 +2,13 @@
 shake an impact gives the camera, where the film has no fixed target to measure it on.
 
     bg = BackgroundMotion.start(frame0, car_rows=(v_top, v_bottom))   # None: no background to use
-    for frame in frames: bg.measure(frame)                              # in the tracker's pass
+    for frame in frames: bg.keep(frame)                                 # in the tracker's pass
     stab = bg.stabilise(uv, sigma_px)                                   # video.motion.Stabilised or None
+
+The frames are kept reduced (:data:`REDUCE`: a sixteenth of their pixels, 8-bit grey) and
+the corners followed through them only when ``stabilise`` is asked for: the tracker asks
+only where no fixed target is in view, and on the other films following them would cost
+more than the rest of the tracking pass.
 
 Corners of the background outside the car's rows (``cv2.goodFeaturesToTrack``) are followed
 from the first frame into each frame (pyramidal Lucas-Kanade, ``cv2.calcOpticalFlowPyrLK``,
@@ -57,10 +62,12 @@ class BackgroundMotion:
     ref : (P, 2) float32, the corners in the first frame, px of the reduced image (:data:`REDUCE`).
     gray0 : the first frame, grey (uint8), reduced.
     shift, roll, shift_sigma, roll_sigma, centre : lists per frame measured.
+    kept : the frames kept (:meth:`keep`) and not yet measured, grey (uint8), reduced.
     """
 
     ref: np.ndarray
     gray0: np.ndarray
+    kept: list = field(default_factory=list)
     shift: list = field(default_factory=list)
     roll: list = field(default_factory=list)
     shift_sigma: list = field(default_factory=list)
@@ -90,12 +97,16 @@ class BackgroundMotion:
                                (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01))
         return cls(ref=pts.reshape(-1, 2), gray0=gray)
 
-    def measure(self, frame: np.ndarray) -> None:
-        """Append this frame's camera motion against the first frame (NaN: not measured).
-        The frame's brightness is first matched to the first frame's over the background
-        (gain and offset: lights flicker, and Lucas-Kanade takes a change of brightness
-        across a corner's slope for a shift)."""
-        gray = self._matched(_gray8(frame))
+    def keep(self, frame: np.ndarray) -> None:
+        """Keep the next frame, reduced, to be measured if the shake is asked for."""
+        self.kept.append(_gray8(frame))
+
+    def _measure(self, gray: np.ndarray) -> None:
+        """Append the camera motion of a frame kept (grey, reduced) against the first frame
+        (NaN: not measured). The frame's brightness is first matched to the first frame's
+        over the background (gain and offset: lights flicker, and Lucas-Kanade takes a
+        change of brightness across a corner's slope for a shift)."""
+        gray = self._matched(gray)
         guess = self.ref if self._last is None else self._last
         cur, ok, _ = cv2.calcOpticalFlowPyrLK(self.gray0, gray, self.ref.reshape(-1, 1, 2),
                                               guess.reshape(-1, 1, 2).copy(), winSize=WINDOW, maxLevel=LEVELS,
@@ -142,7 +153,11 @@ class BackgroundMotion:
         sigmas ``sigma_px`` (n, K) with the correction's added in quadrature; None when the
         camera did not shake (no frame moved by more than ``SHAKE_MIN_PX`` and
         ``SIGNIFICANT`` of its sigmas: a still camera's correction would add only noise).
-        Frames not measured are left as they are (shift NaN)."""
+        Frames not measured are left as they are (shift NaN). The frames kept are
+        measured first (and let go)."""
+        for gray in self.kept:
+            self._measure(gray)
+        self.kept.clear()
         n = uv.shape[0]
         shift, roll, s_sig, r_sig, centre = (_padded(np.array(v[:n], float), n) for v in
                                              (self.shift, self.roll, self.shift_sigma, self.roll_sigma, self.centre))

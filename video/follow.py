@@ -27,7 +27,7 @@ from video.targets import (
     TargetConfig,
     centre_sigma,
     orientation,
-    refine_centre,
+    refine_centre_and_symmetry,
     saddle_response,
     symmetry_errors,
     target_radius,
@@ -242,7 +242,7 @@ def follow_target(gray: np.ndarray, pred: np.ndarray, radius: float, contrast: f
 def _check(gray: np.ndarray, start: np.ndarray, radius: float, contrast: float,
            config: TrackerConfig) -> np.ndarray | None:
     """Refine a candidate centre and check it is the target: (centre, contrast) or None."""
-    c = refine_centre(gray, start, radius)
+    c, errors = refine_centre_and_symmetry(gray, start, radius)
     if not np.all(np.isfinite(c)) or np.hypot(*(c - start)) > 0.5 * radius:
         return None
     r, con = target_radius(gray, c, config.detect, expected=radius)
@@ -250,7 +250,7 @@ def _check(gray: np.ndarray, start: np.ndarray, radius: float, contrast: float,
         return None
     if con < config.min_contrast_ratio * contrast:
         return None
-    e1, e2 = symmetry_errors(gray, c, radius)
+    e1, e2 = errors if errors is not None else symmetry_errors(gray, c, radius)
     if e1 > config.max_point_error or e2 > config.max_quarter_error:
         return None
     return c, con

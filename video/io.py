@@ -44,6 +44,11 @@ DEFAULT_FOLDER_FPS = 1000.0
 #: megapixels; a header claiming more is damaged (and decoding it would exhaust memory).
 MAX_FRAME_SIDE = 16384
 MAX_FRAME_PIXELS = 40_000_000
+#: The opening scan keeps the frames it decodes while they take no more than this, bytes
+#: (a 1280x1024 grey film of 800 frames): the stage then reads them from memory instead of
+#: decoding the film again, which cost as much as the scan itself (``benchmarks/bench_video.py``).
+#: A longer or larger film is decoded again as it is read.
+KEEP_DECODED_BYTES = 1 << 30
 
 
 def check_frame_size(width: int, height: int, where: str) -> None:
@@ -278,6 +283,7 @@ class Film:
         self.diffs = np.zeros(0)
         self.noise = np.zeros(0)
         self.notes: list[str] = []
+        self._kept: list[np.ndarray] | None = None  # the frames as decoded (read-only), or None
 
     # --- decoding -------------------------------------------------------------------
     @property
@@ -295,6 +301,7 @@ class Film:
         ``color=False``), without scanning it again."""
         other = copy.copy(self)
         other.color = color
+        other._kept = self._kept if color == self.color else None
         other._cap = None
         other._next = 0
         other.notes = list(self.notes)
@@ -366,6 +373,8 @@ class Film:
             i += n
         if not 0 <= i < n:
             raise VideoError(f"frame {i} does not exist in {self.path} (it has {n} frames, 0..{n - 1})")
+        if self._kept is not None:
+            return self._kept[i]
         return self._read_file(i) if self.is_folder else self._read_video(i)
 
     __getitem__ = frame
@@ -374,7 +383,11 @@ class Film:
         return self.n_frames
 
     def __iter__(self) -> Iterator[np.ndarray]:
-        """Stream the frames in order (one frame in memory at a time)."""
+        """Stream the frames in order (one frame in memory at a time, unless the opening
+        scan kept them all: :data:`KEEP_DECODED_BYTES`)."""
+        if self._kept is not None:
+            yield from self._kept
+            return
         if self.is_folder:
             for i in range(self.n_frames):
                 yield self._read_file(i)
@@ -424,8 +437,11 @@ def _list_frames(folder: Path) -> list[Path]:
 
 
 def _scan(film: Film, check: DuplicateCheck) -> None:
-    """Decode every frame once: count, check sizes, measure consecutive differences."""
+    """Decode every frame once: count, check sizes, measure consecutive differences; keep
+    the frames while they fit in :data:`KEEP_DECODED_BYTES` (read-only: every reader shares them)."""
     s = check.step
+    kept: list[np.ndarray] | None = []
+    kept_bytes = 0
     diffs: list[float] = []
     noise: list[float] = []
     prev: np.ndarray | None = None
@@ -452,9 +468,17 @@ def _scan(film: Film, check: DuplicateCheck) -> None:
         diffs.append(float("nan") if prev is None else float(cv2.mean(cv2.absdiff(small, prev))[0]))
         prev = small
         count += 1
+        if kept is not None:
+            kept_bytes += frame.nbytes
+            if kept_bytes > KEEP_DECODED_BYTES:
+                kept = None
+            else:
+                frame.flags.writeable = False
+                kept.append(frame)
     if count == 0:
         raise VideoError(f"{film.path} has no frames that decode; check the file (re-export it) or the folder")
     film.n_frames = count
+    film._kept = kept
     film.size = size
     film.diffs = np.asarray(diffs)
     film.noise = np.asarray(noise)

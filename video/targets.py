@@ -50,6 +50,7 @@ __all__ = [
     "refine_gradient",
     "refine_symmetric",
     "refine_centre",
+    "refine_centre_and_symmetry",
     "refine_saddle",
     "refine_opencv",
     "ring_profile",
@@ -352,14 +353,28 @@ def refine_symmetric(gray: np.ndarray, centre: np.ndarray, radius: float,
         r = plus[0] - minus[0]
         jac = np.stack([(plus[1] - plus[2]) - (minus[1] - minus[2]),
                         (plus[3] - plus[4]) - (minus[3] - minus[4])], axis=1)
-        jtj = jac.T @ jac
-        if m < 3 or np.linalg.cond(jtj) > 1e8:
+        step = _solve_normal(jac, -r)
+        if m < 3 or step is None:
             return np.full(2, np.nan)
-        step = np.clip(np.linalg.solve(jtj, -jac.T @ r), -1.0, 1.0)
+        step = np.clip(step, -1.0, 1.0)
         c += step
         if np.hypot(*step) < 1e-3:
             break
     return c + origin
+
+
+def _solve_normal(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
+    """The least-squares step ``(J^T J)^-1 J^T rhs`` of a two-parameter Gauss-Newton, or
+    None where ``J^T J`` is singular or its condition number exceeds 1e8 (in closed form:
+    a 2 x 2 system, where ``numpy.linalg`` spent most of its time checking its arguments)."""
+    a00, a01, a11 = float(jac[:, 0] @ jac[:, 0]), float(jac[:, 0] @ jac[:, 1]), float(jac[:, 1] @ jac[:, 1])
+    half_gap = np.hypot(0.5 * (a00 - a11), a01)
+    largest, least = 0.5 * (a00 + a11) + half_gap, 0.5 * (a00 + a11) - half_gap
+    if not least * 1e8 >= largest or not least > 0.0:
+        return None
+    b0, b1 = float(jac[:, 0] @ rhs), float(jac[:, 1] @ rhs)
+    det = a00 * a11 - a01 * a01
+    return np.array([(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det])
 
 
 def refine_centre(gray: np.ndarray, centre: np.ndarray, radius: float,
@@ -370,17 +385,25 @@ def refine_centre(gray: np.ndarray, centre: np.ndarray, radius: float,
     point-symmetric; otherwise the gradient centre. NaNs where the gradients are
     degenerate (a covered target's flat patch is perfectly point-symmetric: no centre
     is made of it)."""
+    return refine_centre_and_symmetry(gray, centre, radius, iterations)[0]
+
+
+def refine_centre_and_symmetry(gray: np.ndarray, centre: np.ndarray, radius: float,
+                               iterations: int = 6) -> tuple[np.ndarray, tuple[float, float] | None]:
+    """:func:`refine_centre`, and the :func:`symmetry_errors` at the centre it returns
+    where it measured them on the way (None where it did not)."""
     c = refine_gradient(gray, centre, radius, iterations)
     if not np.all(np.isfinite(c)):
-        return c
+        return c, None
     near = np.hypot(*(c - centre)) <= 0.3 * radius
     start = c if near else np.asarray(centre, dtype=float)
     p = refine_symmetric(gray, start, radius)
     if not np.all(np.isfinite(p)) or np.hypot(*(p - start)) > 0.25 * radius:
-        return c
-    if near and symmetry_errors(gray, p, radius)[0] >= symmetry_errors(gray, c, radius)[0]:
-        return c
-    return p
+        return c, None
+    if near:
+        at_p, at_c = symmetry_errors(gray, p, radius), symmetry_errors(gray, c, radius)
+        return (c, at_c) if at_p[0] >= at_c[0] else (p, at_p)
+    return p, None
 
 
 def gradient_smoothing(radius: float) -> float:

@@ -464,22 +464,22 @@ def _background(frame0, later):
     return BackgroundMotion.start(frame0, (top - (bottom - top) / 3, bottom + (bottom - top) / 10))
 
 
-def _measured(frames, bg):
-    """The frames as they are, each measured by ``bg`` (``BackgroundMotion``) on the way."""
+def _kept(frames, bg):
+    """The frames as they are, each kept by ``bg`` (``BackgroundMotion``) on the way."""
     for f in frames:
-        bg.measure(f)
+        bg.keep(f)
         yield f
 
 
 def _follow(film, n: int, first, lens, config: TrackerConfig, progress, notes: list, bg=None):
     """Every target through the film: (tracks as found, undistorted centres (n, K, 2) px,
-    frames blanked as repeats); ``bg`` (``BackgroundMotion``) measures each frame on the way."""
+    frames blanked as repeats); ``bg`` (``BackgroundMotion``) keeps each frame on the way."""
     from video.calibrate import undistort_points
 
     noise = getattr(film, "noise", None)
     noise = None if noise is None or len(noise) != n else np.asarray(noise, float) / 255.0
     frames = prefetch(iter(film))
-    tt = track_targets(frames if bg is None else _measured(frames, bg), n, first, noise, config, progress)
+    tt = track_targets(frames if bg is None else _kept(frames, bg), n, first, noise, config, progress)
     dropped = _drop_repeated_frames(tt, getattr(film, "duplicates", ()), notes)
     uv = tt.uv.copy()
     if lens.corrected:
