@@ -49,7 +49,8 @@ T_BLOCK, T_LIFT, T_FLIGHT = 0.047, 0.069, 0.140
 
 def crash_motion(car, n, n_pre=60, omega=24.0, e=0.2, fps=1000.0):
     """Approach, linear-spring compression, rebound at ``e`` times the impact speed; the
-    front wheels block at 47 ms, the rear wheel lifts at 69 ms and lands again."""
+    front wheels block at 47 ms, the rear wheel lifts at 69 ms (its tyre unloaded over the
+    30 ms before) and lands again at 209 ms."""
     t = (np.arange(n) - n_pre) / fps
     tp = np.maximum(t, 0.0)
     tm = np.pi / (2 * omega)
@@ -72,8 +73,16 @@ def crash_motion(car, n, n_pre=60, omega=24.0, e=0.2, fps=1000.0):
         return car.cg_height + z - (px - car.x_cg) * np.sin(pitch) \
             + (r - car.cg_height) * np.cos(pitch)
 
+    # the rear tyre (250 kN/m) unloads over the 30 ms before it leaves the floor (its hub
+    # rises by the static deflection, which the video stage brackets the lift by) and loads
+    # again over the 30 ms after it lands
+    defl = car.static_wheel_load("rear") / 250e3
+    landed = T_LIFT + T_FLIGHT
+    tyre = defl * np.where(t < landed, np.clip((t - T_LIFT + 0.03) / 0.03, 0.0, 1.0) ** 2,
+                           1.0 - np.clip((t - landed) / 0.03, 0.0, 1.0) ** 2)
+    # in flight from the speed the unloading left it with, down again at 209 ms
     tau = np.clip(t - T_LIFT, 0.0, T_FLIGHT)
-    lift = 0.5 * 20.0 * tau**2 * (1.0 - tau / T_FLIGHT)  # up, and down again at 209 ms
+    lift = tyre + 2.0 * defl / 0.03 * tau * (1.0 - tau / T_FLIGHT)
     return Motion(t=t, x=x, z=z, pitch=pitch, front_wheel_angle=front, rear_wheel_angle=roll,
                   front_wheel_dz=r - axle_z(car.front_axle_x),
                   rear_wheel_dz=r + lift - axle_z(car.rear_axle_x))
