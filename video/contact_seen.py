@@ -77,16 +77,6 @@ FRAMES_AFTER = 6
 #: as something joined to it from this many frames before the stop its most forward rows
 #: show on (which such a fragment, a few px ahead, makes that many frames late)
 JOINED_FRAMES = 3
-#: Largest share by which the picture's scale at the front end may differ from the one the
-#: cell's targets carry it with (the drift of the front seen against the rigid one before
-#: the stop): development films 960005 and 960011 (a lens or a yaw the tapes did not show)
-#: drifted by 4 and 6 %.
-DRIFT_MAX = 0.15
-#: How much the drift must lower a stop's chi-square to be fitted: as much as a stop must
-#: (MIN_CHI2_GAIN). Fitted everywhere, it moved the stops of development films that had no
-#: drift by 0.1-0.6 ms, late; at 9 (3 sigmas for one parameter more) it still moved 5
-#: calibration films' by 0.2-0.3 ms, at 25 none, while it still sees 960005's and 960011's.
-DRIFT_GAIN = 25.0
 #: A frame further than this many sigmas from the stop model is an outlier ...
 OUTLIER = 3.0
 #: ... and a window with more than this share of outliers is no stop.
@@ -168,23 +158,19 @@ def not_seen(why: str) -> SeenContact:
 
 
 def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
-              step_s: float, drift: bool = False) -> tuple[float, float, float, float] | None:
+              step_s: float) -> tuple[float, float, float, float] | None:
     """When a front end carried rigidly stops being the visible one.
 
     Model: the visible front end ``u_seen`` is the rigid one ``u_rigid`` (linearly
     interpolated between frames) plus a constant ``c`` until ``ts``, and stands at
-    ``u_rigid(ts) + c`` from then on (``c``: where the vehicle file's outline puts the front
-    against where the picture shows it). With ``drift``, the front seen before the stop is
-    the rigid one plus ``c + b (u_rigid - u_rigid(ts))`` (``b``: the picture's scale at the
-    front against the one the cell's targets carry it with, which a lens or a yaw the
-    calibration left in moves by a few per cent; within :data:`DRIFT_MAX`). Each ``ts`` on
-    a grid of ``step_s`` is judged on the frames from :data:`FRAMES_BEFORE` frames before it
-    to :data:`FRAMES_AFTER` after it (what happens in front of the car later, debris or a
+    ``u_rigid(ts) + c`` from then on (``c``: where the vehicle file's outline puts the
+    front against where the picture shows it). Each ``ts`` on a grid of ``step_s`` is
+    judged on the frames from :data:`FRAMES_BEFORE` frames before it to
+    :data:`FRAMES_AFTER` after it (what happens in front of the car later, debris or a
     rebound, does not move the stop), by a robust reduced chi-square: ``c`` the window's
-    median offset (with ``drift``: ``c`` and ``b`` fitted, then again without the frames
-    beyond :data:`OUTLIER` sigmas), each frame's term capped at :data:`OUTLIER` squared. A
-    best window with more than :data:`MAX_OUTLIER_SHARE` of outliers is no stop; the others
-    are left out of ``c`` (and ``b``), the sigma and the gain.
+    median offset, each frame's term capped at :data:`OUTLIER` squared. A best window with
+    more than :data:`MAX_OUTLIER_SHARE` of outliers is no stop; the others are left out
+    of ``c``, the sigma and the gain.
 
     Parameters
     ----------
@@ -201,12 +187,10 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
         Stop time (s) and its one-sigma from the chi-square profile on the best window's
         frames (a sixth of the width where it rises by 9, scaled by the reduced
         chi-square when above 1), the stop column px, and how much the stop lowers the
-        chi-square on those frames against a front end that never stops (with its own
-        ``c``, and ``b`` with ``drift``), and the reduced chi-square of the stop on them (outliers left
-        out). None when no window has :data:`MIN_FRAMES_EACH_SIDE` seen frames on either
-        side of the stop, or the best has too many outliers; with ``drift``, also where the
-        drift lowers the chi-square on the best window's frames by less than
-        :data:`DRIFT_GAIN` (a stop with a constant offset is then the one to take).
+        chi-square on those frames against a front end that never stops, and the reduced
+        chi-square of the stop on them (outliers left out). None when no
+        window has :data:`MIN_FRAMES_EACH_SIDE` seen frames on either side of the stop, or
+        the best has too many outliers.
     """
     ok = np.isfinite(u_rigid) & np.isfinite(u_seen) & np.isfinite(sigma) & (sigma > 0)
     if ok.sum() < 2 * MIN_FRAMES_EACH_SIDE:
@@ -215,46 +199,30 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
     dt = float(np.median(np.diff(t)))
     grid = np.arange(tt[0], tt[-1], step_s)
     stop_u = np.interp(grid, tt, ur)
-    moving = tt[None, :] < grid[:, None]
-    res = us[None, :] - np.where(moving, ur[None, :], stop_u[:, None])
-    lever = np.where(moving, ur[None, :] - stop_u[:, None], 0.0)
+    res = us[None, :] - np.where(tt[None, :] < grid[:, None], ur[None, :], stop_u[:, None])
     inside = (tt[None, :] >= grid[:, None] - FRAMES_BEFORE * dt) & (tt[None, :] < grid[:, None] + FRAMES_AFTER * dt)
-    before = np.sum(inside & moving, axis=1)
-    after = np.sum(inside & ~moving, axis=1)
+    before = np.sum(inside & (tt[None, :] < grid[:, None]), axis=1)
+    after = np.sum(inside & (tt[None, :] >= grid[:, None]), axis=1)
     n_in = np.sum(inside, axis=1)
     valid = (before >= MIN_FRAMES_EACH_SIDE) & (after >= MIN_FRAMES_EACH_SIDE)
     if not valid.any():
         return None
-    # robustly: c the window's median offset (with the drift, c and b fitted, then again
-    # without the frames beyond OUTLIER sigmas), every frame's chi-square capped at
-    # OUTLIER^2 (debris in front of the car, a row of background that changed)
-    if drift:
-        c, b = _offset_and_drift(res, lever, w[None, :] * inside)
-        z2 = w[None, :] * (res - c[:, None] - b[:, None] * lever) ** 2
-        c, b = _offset_and_drift(res, lever, w[None, :] * (inside & (z2 <= OUTLIER**2)))
-        valid &= np.abs(b) <= DRIFT_MAX  # NaN where every frame was an outlier: not valid
-        if not valid.any():
-            return None
-    else:
-        c, b, lever = np.nanmedian(np.where(inside, res, np.nan), axis=1), np.zeros(len(grid)), np.zeros_like(res)
-    z2 = w[None, :] * (res - c[:, None] - b[:, None] * lever) ** 2
-    fitted = 3 if drift else 2  # ts and c (and b)
-    score = np.where(valid, np.sum(np.minimum(z2, OUTLIER**2) * inside, axis=1) / np.maximum(n_in - fitted, 1), np.inf)
+    # robustly: c the window's median offset, every frame's chi-square capped at OUTLIER^2
+    # (debris in front of the car, a row of background that changed)
+    c = np.nanmedian(np.where(inside, res, np.nan), axis=1)
+    z2 = w[None, :] * (res - c[:, None]) ** 2
+    score = np.where(valid, np.sum(np.minimum(z2, OUTLIER**2) * inside, axis=1) / np.maximum(n_in - 2, 1), np.inf)
     j = int(np.argmin(score))
     mask = inside[j] & (z2[j] <= OUTLIER**2)
     if np.sum(inside[j] & ~mask) > MAX_OUTLIER_SHARE * n_in[j]:
         return None  # the frames do not look like a front end that stops
     # the profile on the best window's frames, outliers left out
     wm = w * mask
-    cm, bm = _offset_and_drift(res, lever, np.broadcast_to(wm, res.shape))
-    prof = np.sum(wm[None, :] * (res - cm[:, None] - bm[:, None] * lever) ** 2, axis=1)
-    if drift and float(np.sum(wm * (res[j] - np.sum(wm * res[j]) / np.sum(wm)) ** 2)) - float(prof[j]) < DRIFT_GAIN:
-        return None  # the drift explains no more than the noise does: the stop without it
+    cm = np.sum(wm[None, :] * res, axis=1) / np.sum(wm)
+    prof = np.sum(wm[None, :] * (res - cm[:, None]) ** 2, axis=1)
     r0 = us - ur
-    along = (ur - ur[mask].mean()) if drift else np.zeros_like(ur)
-    c0, b0 = _offset_and_drift(r0[None, :], along[None, :], wm[None, :])
-    chi2_none = float(np.sum(wm * (r0 - c0[0] - b0[0] * along) ** 2))
-    reduced = float(prof[j]) / max(int(mask.sum()) - fitted, 1)
+    chi2_none = float(np.sum(wm * (r0 - np.sum(wm * r0) / np.sum(wm)) ** 2))
+    reduced = float(prof[j]) / max(int(mask.sum()) - 2, 1)
     scale = max(1.0, reduced)
     # a sixth of the width of the three-sigma interval (the profile is not a parabola: the
     # stop moves in steps between frames, and the one-sigma width alone came out too narrow)
@@ -262,19 +230,6 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
     within = grid[near & (prof <= prof[j] + 9.0 * scale)]
     sigma_ts = float(within.max() - within.min()) / 6.0 if len(within) > 1 else step_s
     return float(grid[j]), max(sigma_ts, step_s), float(stop_u[j] + cm[j]), chi2_none - float(prof[j]), reduced
-
-
-def _offset_and_drift(res: np.ndarray, lever: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Weighted least squares of ``res ~ c + b lever`` row by row (G, N): (c, b), each (G,);
-    ``b`` 0 where the lever does not vary (the weighted mean for ``c``), NaN where no weight."""
-    sw = weight.sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mx = (weight * lever).sum(axis=1) / sw
-        my = (weight * res).sum(axis=1) / sw
-        sxx = (weight * (lever - mx[:, None]) ** 2).sum(axis=1)
-        sxy = (weight * (lever - mx[:, None]) * (res - my[:, None])).sum(axis=1)
-        b = np.where(sw > 0, np.where(sxx > 1e-9 * sw, sxy / sxx, 0.0), np.nan)
-    return my - b * mx, b
 
 
 def front_column(gray: np.ndarray, background: np.ndarray, rows: np.ndarray, u_from: float,
@@ -630,9 +585,9 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
                 lag_q[k] = float(np.nanquantile(lags, 1.0 - q))
         last = (int(i), gray, rows, band, shift, float(nose[1]))
     u_seen, s_seen, lag = series[FORWARD_QUANTILE]
-    found, drifted = _stop(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
+    found = stop_time(t[idx], u_rigid, u_seen, s_seen, 0.02 / fps)
     median = series[0.5]
-    by_median, median_drifted = _stop(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
+    by_median = stop_time(t[idx], u_rigid, median[0], median[1], 0.02 / fps)
     ahead_px, late_s = 0.0, 0.0
     if found is None:
         joined = "; the rows' median front is followed, their most forward ones showing no clean stop"
@@ -669,7 +624,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
                       f"moved with the cell ({last_moving * 1e3:.2f} ms) and that one ({t_ahead * 1e3:.2f} ms)")
         elif by_median is not None or found is None:
             u_seen, s_seen, lag = median
-            found, drifted = by_median, median_drifted
+            found = by_median
         else:
             # no clean stop in the median rows: the most forward rows' stop stands, its
             # sigma widened: what joined the front came with the contact or after it, so
@@ -723,9 +678,6 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         stopped += (", at an edge of frame 0 beyond the column the depth direction vanishes to (the barrier's "
                     "face in the car's plane)")
     stopped += joined
-    if drifted:
-        stopped += ("; before it, the front seen drifted against the one carried with the cell (the picture's scale "
-                    "there a few per cent off: a lens or yaw not taken out), which the stop was fitted with")
     before = np.isfinite(lag) & (t[idx] < ts) & (t[idx] >= ts - FRAMES_BEFORE / fps)
     if before.any() and np.median(lag[before]) > 0.0:
         lag_px = float(np.median(lag[before]))
@@ -753,17 +705,6 @@ def noise_ahead(gray: np.ndarray, background: np.ndarray, u_front: float, rows: 
 
     ahead = _band(u_front + direction * np.arange(search_px + 2.0, search_px + 14.0), rows)
     return 1.4826 * float(np.nanmedian(np.abs(sample(gray, ahead) - sample(background, ahead - shift))))
-
-
-def _stop(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
-          step_s: float) -> tuple[tuple | None, bool]:
-    """:func:`stop_time` with the front's drift fitted where it lowers the chi-square by
-    :data:`DRIFT_GAIN` and shows a clean stop (a gain of :data:`MIN_CHI2_GAIN`), else with a
-    constant offset; and whether the drift was fitted."""
-    drifting = stop_time(t, u_rigid, u_seen, sigma, step_s, drift=True)
-    if drifting is not None and drifting[3] >= MIN_CHI2_GAIN:
-        return drifting, True
-    return stop_time(t, u_rigid, u_seen, sigma, step_s), False
 
 
 def _joined_ahead(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
