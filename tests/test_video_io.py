@@ -93,6 +93,10 @@ def test_a_film_that_fits_in_memory_is_read_from_the_opening_scan_and_stays_as_d
     monkeypatch.setattr(decoded, "_read_video", no_decoding)
     with pytest.raises(AssertionError, match="decoded again"):
         decoded[4]
+    # closed, a film lets its frames go (the fit runs without them) and decodes them again
+    kept.close()
+    with pytest.raises(AssertionError, match="decoded again"):
+        kept[4]
 
 
 def test_publication_rate_gets_a_note_and_fps_overrides_it(tmp_path):

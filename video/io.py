@@ -407,7 +407,9 @@ class Film:
         return np.arange(self.n_frames) / self.fps
 
     def close(self) -> None:
-        """Release the decoder kept for random access."""
+        """Release the decoder kept for random access and the frames kept from the opening
+        scan; the film can still be read (decoded again)."""
+        self._kept = None
         if self._cap is not None:
             self._cap.release()
             self._cap = None

@@ -113,6 +113,7 @@ def load_recording(
 
         film = open_film(path, fps=fps)
         tracks = track_film(film, car_geometry, tape_segment_m=tape_segment_m, speed_mps=speed_mps, progress=progress)
+        film.close()  # the fit runs without the frames the opening scan kept; the report decodes the few it draws
         return Recording(measurement_from_tracks(tracks, str(path)), "film", path, tracks=tracks, film=film)
     raise UserError(
         f"{path}: not a recording this tool reads (a video file {', '.join(sorted(VIDEO_SUFFIXES))},"
