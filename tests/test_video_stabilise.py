@@ -131,3 +131,31 @@ def test_a_reference_world_film_shaken_after_impact_is_tracked_to_a_third_of_a_p
     assert any(n.startswith("camera motion taken out of every track from 3 fixed target(s)") for n in tracks.notes)
     err = tracking_errors(tracks.channels["x_m"], tracks.contact_frame, truth)
     assert err["x_rms_mm"] / 1e3 < tracks.scale_m_per_px / 3
+
+
+def test_the_background_measured_as_frames_come_is_measured_as_when_kept(monkeypatch):
+    """A long film's background frames are measured as they come (past
+    ``background_motion.KEEP_BYTES`` of them kept), to the same shifts as when they are kept
+    and measured at the end; and a shift of the picture is found."""
+    import cv2
+
+    import video.background_motion as bm
+
+    rng = np.random.default_rng(4)
+    wall = cv2.GaussianBlur(rng.uniform(0, 255, (480, 640)).astype(np.float32), (0, 0), 3.0)
+    shifts = [(0.0, 0.0)] * 17 + [(4.0 * np.sin(0.3 * k), 2.0 * np.cos(0.2 * k) - 2.0) for k in range(24)]
+    frames = [np.clip(cv2.warpAffine(wall, np.float32([[1, 0, du], [0, 1, dv]]), (640, 480),
+                                     borderMode=cv2.BORDER_REFLECT) + rng.normal(0, 1.0, wall.shape), 0, 255)
+              .astype(np.uint8) for du, dv in shifts]
+    uv = np.full((len(frames), 1, 2), 320.0)
+    sigma = np.full((len(frames), 1), 0.05)
+    measured = {}
+    for name, limit in (("kept", bm.KEEP_BYTES), ("as they come", 3 * 160 * 120)):
+        monkeypatch.setattr(bm, "KEEP_BYTES", limit)
+        bg = bm.BackgroundMotion.start(frames[0], car_rows=(200.0, 280.0))
+        for f in frames:
+            bg.keep(f)
+        assert len(bg.kept) == (len(frames) if name == "kept" else 0)
+        measured[name] = bg.stabilise(uv, sigma)
+    np.testing.assert_allclose(measured["kept"].shift_px, measured["as they come"].shift_px)
+    np.testing.assert_allclose(measured["kept"].shift_px[17:], np.array(shifts[17:]), atol=0.1)

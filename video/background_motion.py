@@ -8,7 +8,8 @@ shake an impact gives the camera, where the film has no fixed target to measure 
 The frames are kept reduced (:data:`REDUCE`: a sixteenth of their pixels, 8-bit grey) and
 the corners followed through them only when ``stabilise`` is asked for: the tracker asks
 only where no fixed target is in view, and on the other films following them would cost
-more than the rest of the tracking pass.
+more than the rest of the tracking pass. Past :data:`KEEP_BYTES` of them (a long film) the
+frames kept are measured at once and every later one as it comes.
 
 Corners of the background outside the car's rows (``cv2.goodFeaturesToTrack``) are followed
 from the first frame into each frame (pyramidal Lucas-Kanade, ``cv2.calcOpticalFlowPyrLK``,
@@ -50,6 +51,9 @@ SATURATED = 250
 REDUCE = 4
 #: Lucas-Kanade window and pyramid levels above the reduced image, px.
 WINDOW, LEVELS = (11, 11), 1
+#: Most bytes of reduced frames kept to be measured later (a 1280x1024 film's 3200 frames);
+#: beyond it, each frame is measured as it comes.
+KEEP_BYTES = 256 << 20
 
 
 @dataclass
@@ -98,8 +102,17 @@ class BackgroundMotion:
         return cls(ref=pts.reshape(-1, 2), gray0=gray)
 
     def keep(self, frame: np.ndarray) -> None:
-        """Keep the next frame, reduced, to be measured if the shake is asked for."""
+        """Keep the next frame, reduced, to be measured if the shake is asked for (past
+        :data:`KEEP_BYTES` of them, measured now)."""
         self.kept.append(_gray8(frame))
+        if len(self.kept) * self.kept[0].nbytes > KEEP_BYTES or len(self.shift):
+            self._measure_kept()
+
+    def _measure_kept(self) -> None:
+        """Measure the frames kept, in order, and let them go."""
+        for gray in self.kept:
+            self._measure(gray)
+        self.kept.clear()
 
     def _measure(self, gray: np.ndarray) -> None:
         """Append the camera motion of a frame kept (grey, reduced) against the first frame
@@ -155,9 +168,7 @@ class BackgroundMotion:
         ``SIGNIFICANT`` of its sigmas: a still camera's correction would add only noise).
         Frames not measured are left as they are (shift NaN). The frames kept are
         measured first (and let go)."""
-        for gray in self.kept:
-            self._measure(gray)
-        self.kept.clear()
+        self._measure_kept()
         n = uv.shape[0]
         shift, roll, s_sig, r_sig, centre = (_padded(np.array(v[:n], float), n) for v in
                                              (self.shift, self.roll, self.shift_sigma, self.roll_sigma, self.centre))

@@ -2,9 +2,11 @@
 frames (PNG/TIFF/JPEG/BMP), streamed frame by frame.
 
 Frames are returned as uint8 arrays: grayscale ``(H, W)`` by default, BGR ``(H, W, 3)``
-with ``color=True``. A film is never held in memory: opening it makes one pass that
-checks every frame decodes, counts them, checks their sizes and looks for duplicated
-frames (keeping two numbers per frame), then frames are decoded again on demand.
+with ``color=True``. Opening a film makes one pass that checks every frame decodes,
+counts them, checks their sizes and looks for duplicated frames (keeping two numbers per
+frame); it keeps the frames it decoded while they take at most :data:`KEEP_DECODED_BYTES`
+(read-only: every reader shares them), and the film is read from them until it is closed.
+A longer or larger film is never held in memory: its frames are decoded again on demand.
 
 Example
 -------
@@ -366,7 +368,7 @@ class Film:
         Returns
         -------
         (H, W) uint8 grayscale, or (H, W, 3) uint8 BGR if the film was opened with
-        ``color=True``.
+        ``color=True``; read-only while the film keeps its frames (copy it to change it).
         """
         n = self.n_frames
         if i < 0:

@@ -368,11 +368,16 @@ def _solve_normal(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     None where ``J^T J`` is singular or its condition number exceeds 1e8 (in closed form:
     a 2 x 2 system, where ``numpy.linalg`` spent most of its time checking its arguments)."""
     a00, a01, a11 = float(jac[:, 0] @ jac[:, 0]), float(jac[:, 0] @ jac[:, 1]), float(jac[:, 1] @ jac[:, 1])
+    trace = a00 + a11
+    if not trace > 0.0:
+        return None
+    # both sides divided by the trace: the determinant neither under- nor overflows
+    a00, a01, a11 = a00 / trace, a01 / trace, a11 / trace
     half_gap = np.hypot(0.5 * (a00 - a11), a01)
-    largest, least = 0.5 * (a00 + a11) + half_gap, 0.5 * (a00 + a11) - half_gap
+    largest, least = 0.5 + half_gap, 0.5 - half_gap
     if not least * 1e8 >= largest or not least > 0.0:
         return None
-    b0, b1 = float(jac[:, 0] @ rhs), float(jac[:, 1] @ rhs)
+    b0, b1 = float(jac[:, 0] @ rhs) / trace, float(jac[:, 1] @ rhs) / trace
     det = a00 * a11 - a01 * a01
     return np.array([(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det])
 

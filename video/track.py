@@ -507,6 +507,8 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
     if not config.stabilise:
         return roles, uv, sigma_px, None
     if len(fixed):
+        if bg is not None:
+            bg.kept.clear()  # the fixed targets measure the shake: the background's frames are let go
         stab, source, lost = (stabilise_on_fixed(uv, sigma_px, fixed), f"{len(fixed)} fixed target(s)",
                               "where no fixed target is seen")
     elif bg is not None:
