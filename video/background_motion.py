@@ -105,7 +105,8 @@ class BackgroundMotion:
         """Keep the next frame, reduced, to be measured if the shake is asked for (past
         :data:`KEEP_BYTES` of them, measured now)."""
         self.kept.append(_gray8(frame))
-        if len(self.kept) * self.kept[0].nbytes > KEEP_BYTES or len(self.shift):
+        # once past KEEP_BYTES (frames measured already), every frame is measured as it comes
+        if self.shift or len(self.kept) * self.kept[0].nbytes > KEEP_BYTES:
             self._measure_kept()
 
     def _measure_kept(self) -> None:

@@ -445,7 +445,6 @@ def _scan(film: Film, check: DuplicateCheck) -> None:
     the frames while they fit in :data:`KEEP_DECODED_BYTES` (read-only: every reader shares them)."""
     s = check.step
     kept: list[np.ndarray] | None = []
-    kept_bytes = 0
     diffs: list[float] = []
     noise: list[float] = []
     prev: np.ndarray | None = None
@@ -473,8 +472,7 @@ def _scan(film: Film, check: DuplicateCheck) -> None:
         prev = small
         count += 1
         if kept is not None:
-            kept_bytes += frame.nbytes
-            if kept_bytes > KEEP_DECODED_BYTES:
+            if (len(kept) + 1) * frame.nbytes > KEEP_DECODED_BYTES:  # the frames all have one size
                 kept = None
             else:
                 frame.flags.writeable = False
