@@ -78,10 +78,12 @@ def test_a_film_that_fits_in_memory_is_read_from_the_opening_scan_and_stays_as_d
     monkeypatch.setattr(kept, "_open_capture", no_decoding)
     monkeypatch.setattr(kept, "_read_video", no_decoding)
     frames = list(kept)
+    assert kept.in_memory  # what the tracker reads without a decoding thread
     # a film longer than the memory kept for it (five of its frames) is decoded again, to
     # the same frames
     monkeypatch.setattr(video.io, "KEEP_DECODED_BYTES", 5 * 320 * 160)
     decoded = open_film(mp4)
+    assert not decoded.in_memory
     assert len(frames) == len(decoded) == 12
     for i in (7, 2, 11, 0):
         np.testing.assert_array_equal(kept[i], decoded[i])
@@ -95,6 +97,7 @@ def test_a_film_that_fits_in_memory_is_read_from_the_opening_scan_and_stays_as_d
         decoded[4]
     # closed, a film lets its frames go (the fit runs without them) and decodes them again
     kept.close()
+    assert not kept.in_memory
     with pytest.raises(AssertionError, match="decoded again"):
         kept[4]
 

@@ -22,8 +22,10 @@ from video.targets import (
     refine_gradient,
     refine_symmetric,
     symmetry_errors,
+    target_radius,
     to_gray,
 )
+from video.targets import _radii_of_many
 
 
 def draw_targets(shape, centres, radii, angles, ss=8, bg=0.5, dark=0.05, light=0.95,
@@ -373,6 +375,26 @@ def test_targets_of_a_4_px_radius_are_found_under_noise():
     assert len(det) == 4
     dist, idx = _match(det.centres, centres)
     assert len(set(idx)) == 4 and dist.max() < 0.15
+
+
+def test_the_first_look_at_many_candidates_is_target_radius_at_each():
+    """The detector's first look at a frame's thousands of candidates samples their rings
+    together (``_radii_of_many``); each gives what ``target_radius`` gives alone: targets
+    of 5-20 px, texture, points near the border, a target too small for the config, and
+    more candidates than one chunk."""
+    centres, radii, angles, rng = _grid_scene(11)
+    img = draw_targets((250, 320), centres, radii, angles)
+    img = np.clip(img + rng.normal(0.0, 0.03, img.shape), 0, 1).astype(np.float32)
+    starts = np.concatenate([centres + rng.uniform(-1.0, 1.0, centres.shape),
+                             rng.uniform([0, 0], [320, 250], (40, 2)), [[1.0, 1.0], [319.0, 120.0]]])
+    config = TargetConfig(min_radius_px=8.0)
+    one = np.array([target_radius(img, s, config) for s in starts])
+    for chunk in (7, 256):
+        radius, contrast = _radii_of_many(img, starts, config, chunk=chunk)
+        assert np.array_equal(np.isnan(radius), np.isnan(one[:, 0]))
+        np.testing.assert_allclose(radius, one[:, 0], rtol=1e-9, atol=1e-9, equal_nan=True)
+        np.testing.assert_allclose(contrast, one[:, 1], rtol=1e-9, atol=1e-12)
+    assert np.isfinite(one[:, 0]).sum() >= 10 and np.isnan(one[:, 0]).sum() >= 10  # both kinds were there
 
 
 def test_radius_range_is_respected():

@@ -294,6 +294,11 @@ class Film:
         return self._files is not None
 
     @property
+    def in_memory(self) -> bool:
+        """True while the opening scan's frames are kept (reading one costs no decoding)."""
+        return self._kept is not None
+
+    @property
     def files(self) -> list[Path]:
         """The frame files of a folder, in natural order (empty for a video file)."""
         return list(self._files or [])

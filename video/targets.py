@@ -178,7 +178,8 @@ def _sample(gray: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     mu = np.ascontiguousarray(u, dtype=np.float32)
     mv = np.ascontiguousarray(v, dtype=np.float32)
     shape = mu.shape
-    out = cv2.remap(gray, mu.reshape(1, -1), mv.reshape(1, -1), cv2.INTER_LINEAR,
+    cols = max(shape[-1] if mu.ndim > 1 else mu.size, 1)  # a map's rows as the last axis: each side under 32767
+    out = cv2.remap(gray, mu.reshape(-1, cols), mv.reshape(-1, cols), cv2.INTER_LINEAR,
                     borderMode=cv2.BORDER_REPLICATE)
     return out.reshape(shape)
 
@@ -203,10 +204,18 @@ def ring_profile(gray: np.ndarray, centre: np.ndarray, radii: np.ndarray,
         ``c2 = mean_j I(theta_j) exp(-2i theta_j)`` per ring. For a quadrant pattern of
         contrast C its modulus is ``C * 2 / pi`` inside the disc (ideal edges).
     """
-    th = np.arange(n_angles) * (2 * np.pi / n_angles)
+    cos, sin, phasor = _ring_angles(n_angles)
     r = np.asarray(radii, dtype=float)[:, None]
-    vals = _sample(gray, centre[0] + r * np.cos(th), centre[1] + r * np.sin(th))
-    return (vals * np.exp(-2j * th)).mean(axis=1)
+    vals = _sample(gray, centre[0] + r * cos, centre[1] + r * sin)
+    return vals @ phasor
+
+
+@lru_cache(maxsize=8)
+def _ring_angles(n_angles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """cos and sin of ``n_angles`` angles evenly round a circle, and ``exp(-2i theta) /
+    n_angles`` (the second harmonic's mean as one product)."""
+    th = np.arange(n_angles) * (2 * np.pi / n_angles)
+    return np.cos(th), np.sin(th), np.exp(-2j * th) / n_angles
 
 
 def target_radius(gray: np.ndarray, centre: np.ndarray, config: TargetConfig = TargetConfig(),
@@ -224,24 +233,55 @@ def target_radius(gray: np.ndarray, centre: np.ndarray, config: TargetConfig = T
     contrast : float
         Light-minus-dark difference estimated from the harmonic's maximum, [0, 1].
     """
+    radii = _search_radii(config, expected)
+    radius, contrast = _radius_from_rings(np.abs(ring_profile(gray, centre, radii))[None], radii, config)
+    return float(radius[0]), float(contrast[0])
+
+
+def _search_radii(config: TargetConfig, expected: float | None) -> np.ndarray:
+    """The ring radii :func:`target_radius` examines, px."""
     if expected is None:
-        radii = np.arange(1.0, config.max_radius_px * 1.3 + 1.0, 0.5)
-    else:
-        radii = np.arange(max(1.0, 0.3 * expected), 1.6 * expected + 0.5, 0.5)
-    amp = np.abs(ring_profile(gray, centre, radii))
-    k = int(np.argmax(amp))
-    peak = amp[k]
-    below = np.nonzero(amp[k:] < 0.5 * peak)[0]
-    if len(below) == 0:
-        return float("nan"), float(peak * np.pi / 2)
-    j = k + below[0]
+        return np.arange(1.0, config.max_radius_px * 1.3 + 1.0, 0.5)
+    return np.arange(max(1.0, 0.3 * expected), 1.6 * expected + 0.5, 0.5)
+
+
+def _radius_from_rings(amp: np.ndarray, radii: np.ndarray, config: TargetConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Radius (px; NaN where the harmonic never falls to half its maximum beyond it, or
+    the radius is under ``config.min_radius_px``) and contrast of each of N candidates from
+    the modulus ``amp`` (N, R) of their quadrant harmonic on rings ``radii`` (R,): see
+    :func:`target_radius`."""
+    n = np.arange(len(amp))
+    k = np.argmax(amp, axis=1)
+    peak = amp[n, k]
+    below = (np.arange(amp.shape[1])[None, :] >= k[:, None]) & (amp < 0.5 * peak[:, None])
+    j = np.argmax(below, axis=1)  # the first ring beyond the peak below half of it (j > k)
     # linear interpolation of the half-maximum crossing between radii[j-1] and radii[j]
-    a0, a1 = amp[j - 1], amp[j]
-    frac = (a0 - 0.5 * peak) / max(a0 - a1, 1e-12)
+    a0, a1 = amp[n, j - 1], amp[n, j]
+    frac = (a0 - 0.5 * peak) / np.maximum(a0 - a1, 1e-12)
     radius = radii[j - 1] + frac * (radii[j] - radii[j - 1])
-    if radius < config.min_radius_px:
-        return float("nan"), float(peak * np.pi / 2)
-    return float(radius), float(peak * np.pi / 2)
+    radius = np.where(below.any(axis=1) & (radius >= config.min_radius_px), radius, np.nan)
+    return radius, peak * np.pi / 2
+
+
+def _radii_of_many(gray: np.ndarray, starts: np.ndarray, config: TargetConfig,
+                   chunk: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`target_radius` (radius unknown) at each of the (N, 2) ``starts``, px: the
+    rings of many candidates sampled together (a frame's thousands of candidates,
+    most of which this first look rejects)."""
+    radii = _search_radii(config, None)
+    cos, sin, phasor = _ring_angles(48)
+    out_r, out_c = [], []
+    for a in range(0, len(starts), chunk):
+        c = np.asarray(starts[a:a + chunk], float)
+        vals = _sample(gray, c[:, 0, None, None] + radii[None, :, None] * cos,
+                       c[:, 1, None, None] + radii[None, :, None] * sin)
+        v = vals.astype(float)
+        r, con = _radius_from_rings(np.hypot(v @ phasor.real, v @ phasor.imag), radii, config)
+        out_r.append(r)
+        out_c.append(con)
+    if not out_r:
+        return np.zeros(0), np.zeros(0)
+    return np.concatenate(out_r), np.concatenate(out_c)
 
 
 def orientation(gray: np.ndarray, centre: np.ndarray, radius: float) -> float:
@@ -294,7 +334,7 @@ def symmetry_errors(gray: np.ndarray, centre: np.ndarray, radius: float,
     a = np.where(mask, patch - patch[mask].mean(), 0.0)
     norm = max(float((a * a).sum()), 1e-12)
     e_point = float(((a - a[::-1, ::-1]) ** 2).sum()) / norm / 2
-    e_quarter = float(((a + np.rot90(a)) ** 2).sum()) / norm / 2
+    e_quarter = float(((a + a.T[::-1]) ** 2).sum()) / norm / 2  # a.T[::-1]: a turned a quarter
     return e_point, e_quarter
 
 
@@ -467,8 +507,9 @@ def refine_gradient(gray: np.ndarray, centre: np.ndarray, radius: float,
     qu = qu1[None, :]
     qv = qv1[:, None]
     guu, guv, gvv = gu * gu, gu * gv, gv * gv
-    buu = guu * qu + guv * qv
-    bvv = guv * qu + gvv * qv
+    # the five sums of the normal equations as one product with the weights
+    terms = np.stack([guu, guv, gvv, guu * qu + guv * qv, guv * qu + gvv * qv]).reshape(5, -1)
+    qu, qv = np.broadcast_to(qu, guu.shape).ravel(), np.broadcast_to(qv, guu.shape).ravel()
     sw2 = 2 * (0.35 * radius) ** 2
     cut2 = (0.75 * radius) ** 2
     for _ in range(iterations):
@@ -476,8 +517,7 @@ def refine_gradient(gray: np.ndarray, centre: np.ndarray, radius: float,
             return np.full(2, np.nan)
         d2 = (qu - c[0]) ** 2 + (qv - c[1]) ** 2
         w = np.where(d2 <= cut2, np.exp(-d2 / sw2), 0.0)
-        a00, a01, a11 = (w * guu).sum(), (w * guv).sum(), (w * gvv).sum()
-        b0, b1 = (w * buu).sum(), (w * bvv).sum()
+        a00, a01, a11, b0, b1 = terms @ w
         det = a00 * a11 - a01 * a01
         if not np.isfinite(det) or det <= 1e-12 * max((a00 + a11) ** 2, 1e-30):
             return np.full(2, np.nan)
@@ -553,9 +593,10 @@ def _local_maxima(resp: np.ndarray, threshold: float, min_distance: int) -> np.n
     return np.stack([us[order], vs[order]], axis=1)
 
 
-def _examine(gray: np.ndarray, start: np.ndarray, config: TargetConfig):
-    """Refine and check one candidate; return (centre, radius, contrast, sym) or None."""
-    radius, contrast = target_radius(gray, start, config)
+def _examine(gray: np.ndarray, start: np.ndarray, config: TargetConfig, first_look=None):
+    """Refine and check one candidate; return (centre, radius, contrast, sym) or None.
+    ``first_look``: :func:`target_radius` at ``start``, when measured already."""
+    radius, contrast = target_radius(gray, start, config) if first_look is None else first_look
     if not np.isfinite(radius) or contrast < config.min_contrast:
         return None
     c = refine_gradient(gray, start, radius, config.refine_iterations)
@@ -607,13 +648,16 @@ def detect_targets(frame: np.ndarray, config: TargetConfig = TargetConfig(),
     # an ideal X-corner of contrast C gives about (C / (2 pi))^2 * 4 at any scale;
     # accept a fifth of that for the weakest contrast we look for
     threshold = 0.2 * (config.min_contrast / np.pi) ** 2
-    cand = _local_maxima(resp, threshold, max(2, int(config.min_radius_px)))
+    cand = _local_maxima(resp, threshold, max(2, int(config.min_radius_px)))[: config.max_candidates]
+    starts = cand.astype(float) + np.array([u0, v0], dtype=float)
+    # the first look at every candidate at once; most are the background's corners
+    radius, contrast = _radii_of_many(gray, starts, config)
+    looked = np.isfinite(radius) & (contrast >= config.min_contrast)
     found: list = []
-    for uv in cand[: config.max_candidates]:
-        start = np.array([uv[0] + u0, uv[1] + v0], dtype=float)
+    for start, r, con in zip(starts[looked], radius[looked], contrast[looked]):
         if any(np.hypot(*(start - f[0])) < max(2.0, 0.5 * f[1]) for f in found):
             continue
-        res = _examine(gray, start, config)
+        res = _examine(gray, start, config, (r, con))
         if res is None:
             continue
         if any(np.hypot(*(res[0] - f[0])) < max(2.0, 0.5 * f[1]) for f in found):

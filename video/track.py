@@ -478,7 +478,9 @@ def _follow(film, n: int, first, lens, config: TrackerConfig, progress, notes: l
 
     noise = getattr(film, "noise", None)
     noise = None if noise is None or len(noise) != n else np.asarray(noise, float) / 255.0
-    frames = prefetch(iter(film))
+    # a decoding thread overlaps decoding with tracking; frames in memory need none (the
+    # thread's hand-over then only costs the tracker the GIL)
+    frames = iter(film) if getattr(film, "in_memory", False) else prefetch(iter(film))
     tt = track_targets(frames if bg is None else _kept(frames, bg), n, first, noise, config, progress)
     dropped = _drop_repeated_frames(tt, getattr(film, "duplicates", ()), notes)
     uv = tt.uv.copy()
