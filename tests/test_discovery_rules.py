@@ -333,10 +333,10 @@ def test_held_out_chi2_counts_only_left_out_measured_samples_divided_by_tau():
 
 # ---------------------------------------------------------------- evidence: blocked front wheels
 
-def wheel_recording(angle_turn_rad, car_moves_m, with_angle=True, sigma=0.005, n=101, duration=0.1):
+def wheel_recording(angle_turn_rad, car_moves_m, with_angle=True, sigma=0.005, n=101, duration=0.1, depth_std=0.01):
     """A recording of ``duration`` s (one sample a millisecond by default) in which the body
     moves ``car_moves_m`` and the measured front wheel angle turns ``angle_turn_rad`` (both
-    evenly); the front wheels blocked throughout."""
+    evenly); the front wheels blocked throughout, at a depth fitted to ``depth_std`` m."""
     t = np.linspace(0.0, duration, n)
     ch, sg = {"x_m": car_moves_m * t / duration}, {"x_m": np.full(n, 1e-3)}
     if with_angle:
@@ -345,7 +345,7 @@ def wheel_recording(angle_turn_rad, car_moves_m, with_angle=True, sigma=0.005, n
     traj = types.SimpleNamespace(t=t, front_blocked=np.ones(n), crush=np.linspace(0.0, 0.6, n),
                                  engine_force=np.zeros(n))
     return FakeFit(m, {"x_m": ch["x_m"]}, ("front_wheel_block.depth",), {"front_wheel_block.depth": 0.45},
-                   {"front_wheel_block.depth": 0.01}, {}, {}, traj, types.SimpleNamespace(k_compression=1e6))
+                   {"front_wheel_block.depth": depth_std}, {}, {}, traj, types.SimpleNamespace(k_compression=1e6))
 
 
 # ---------------------------------------------------------------- evidence: rear wheels lifted
@@ -439,6 +439,36 @@ def test_wheels_seen_turning_refute_blocking(a4):
     # and discovery's plausibility check applies it
     assert "shows the front wheels turning" in _plausible("front_wheel_block", wheel_recording(0.8 * rolling, 0.20), a4)
     assert _plausible("front_wheel_block", wheel_recording(0.01, 0.20), a4) == ""
+
+
+def test_wheels_seen_blocked_are_a_finding_whatever_the_spread_of_the_depth(a4):
+    """A depth spread beyond 0.1 m (the covariance widened as a whole by a heave that the
+    model misses) refuses a blocking no channel shows, not one the hub angle shows: the wheels
+    seen standing still where the fitted model blocks them (development world 960030)."""
+    assert _plausible("front_wheel_block", wheel_recording(0.01, 0.20, depth_std=0.15), a4) == ""
+    assert "depth is not determined (std 0.150 m)" in _plausible(
+        "front_wheel_block", wheel_recording(0.0, 0.20, with_angle=False, depth_std=0.15), a4)
+    assert "depth is not determined" in _plausible(  # standing still cannot be told from rolling
+        "front_wheel_block", wheel_recording(0.0, 0.001, depth_std=0.15), a4)
+
+
+def test_the_blocking_is_started_where_the_film_saw_the_wheels_stop(a4):
+    """A start beyond the crush the model reaches never blocks, and no step of the fit moves
+    it: where the recording saw the front wheels blocked, the depth starts at the current
+    model's crush then (the film's clock: contact 2 ms after its zero); where it did not, or
+    the crush then is under 5 cm, it starts as the misfit window's rule has it."""
+    from identify.discover.candidates.front_wheel_block import where_seen_blocked, wheels_stop_turning
+
+    def current(events):
+        traj = types.SimpleNamespace(t=np.linspace(0.0, 0.1, 101), crush=np.linspace(0.0, 0.6, 101))
+        return types.SimpleNamespace(trajectory=traj, contact_time=0.002,
+                                     measurement=types.SimpleNamespace(events_ms=events))
+
+    assert where_seen_blocked(current({"front_wheel_block": 52.0}), a4, None) == pytest.approx(0.30)
+    rule = wheels_stop_turning(current({}), a4, None)
+    assert where_seen_blocked(current({}), a4, None) == rule
+    assert where_seen_blocked(current({"front_wheel_block": 9.0}), a4, None) == rule  # 4.2 cm
+    assert where_seen_blocked(None, a4, None) == wheels_stop_turning(None, a4, None)
 
 
 def test_blocking_while_the_car_stands_still_is_not_a_finding(a4):
@@ -606,7 +636,8 @@ def test_each_candidates_parameters_are_its_mechanisms_fields_in_its_units_and_r
                 assert p.unit == c.mechanism.units[field], p
             assert p.transform in ("log", "logit", "tanh", "linear"), p
             fit = types.SimpleNamespace(trajectory=types.SimpleNamespace(crush=np.array([0.0, 0.6]), engine_x=np.array([0.0, 0.6])),
-                                        params=types.SimpleNamespace(k_compression=1e6), values={})
+                                        params=types.SimpleNamespace(k_compression=1e6), values={},
+                                        measurement=types.SimpleNamespace(events_ms={}))
             for start in (*c.starts, *c.measured_starts):
                 v = start[field](fit, a4, None) if callable(start[field]) else start[field]
                 if p.transform == "logit":

@@ -78,3 +78,22 @@ def test_the_threshold_is_a_tenth_of_a_radian(lead):
     found = spin_on_time(T, m.channels["rear_wheel_angle_rad"], m.sigma["rear_wheel_angle_rad"], m.channels["x_m"],
                          m.sigma["x_m"], R)
     assert (found is not None) is (lead > SPIN_ON_RAD)
+
+
+def test_a_wheel_that_slips_ahead_and_is_then_blocked_did_not_spin_on():
+    """As on development world 960003: the front wheel slips ahead of rolling by 0.15 rad
+    over 10-30 ms, is blocked from 30 ms (the car moves on: it falls behind) and, released at
+    120 ms, turns on 0.4 rad ahead once the car rebounds. The slip is no spin-on (the angle
+    fell back behind rolling, which only a wheel turning slower than the car does): the wheel
+    is fitted through the blocking and cut only where the lead that stays began, after 120 ms."""
+    x = _x()
+    ramp = 0.15 * np.clip((T - 0.010) / 0.020, 0.0, 1.0)
+    i30 = np.searchsorted(T, 0.030)
+    angle = np.where(T < 0.030, x / R + ramp, x[i30] / R + 0.15)
+    angle = angle + np.where(T > 0.120, 0.4 + (x - x[i30]) / R, 0.0) * np.clip((T - 0.120) / 0.02, 0.0, 1.0)
+    m = _measurement(x / R, angle)
+    blocked_only = np.where(T < 0.120, angle, angle[np.searchsorted(T, 0.120)])
+    assert spin_on_time(T, blocked_only, m.sigma["rear_wheel_angle_rad"], m.channels["x_m"], m.sigma["x_m"], R) is None
+    onset = spin_on_time(T, m.channels["rear_wheel_angle_rad"], m.sigma["rear_wheel_angle_rad"], m.channels["x_m"],
+                         m.sigma["x_m"], R)
+    assert onset is not None and 0.100 <= onset <= 0.125

@@ -47,6 +47,7 @@ import numpy as np
 
 from identify.discover.candidates import (
     BY_EFFECT,
+    SEEN,
     CANDIDATES,
     held_for,
     kept_mechanisms,
@@ -411,7 +412,8 @@ def phases_spanned(window, phases) -> str:
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     """'' when the fitted candidate is a finding, else why not. Every candidate: no prior
     pulled beyond 3 sigma, no parameter at a bound or undetermined, a depth the crush reaches
-    and the data fix (an engine's gap, too); then its own evidence check over the window
+    and the data fix, or that a measured channel shows acting (an engine's gap: the data fix
+    it); then its own evidence check over the window
     where it acts and its own rules (``Candidate.evidence``, ``Candidate.implausible``); and
     a candidate with an evidence check must act somewhere in the recording
     (``Candidate.acting``: a rear axle candidate whose model never lifts the rear lowered the
@@ -420,6 +422,7 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     why = _prior_conflicts(fr)
     if why:
         return why
+    against, window, seen = _evidence_against(effect, fr, vehicle)
     for p in BY_EFFECT[effect].parameters:
         value, sd = fr.values[p.name], fr.std[p.name]
         if fr.at_bound.get(p.name):
@@ -428,16 +431,20 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
             return f"{p.name} is not determined by the data"
         if p.name.endswith(".depth") and value > crush_max - 0.005:
             return f"its depth ({value:.3f} m) is not reached (maximum crush {crush_max:.3f} m)"
-        if p.name.endswith(".depth") and sd > 0.1:
+        # a mechanism a measured channel shows acting where the fit has it (the hub angle standing
+        # still, the hub rising) is a finding where its depth is spread by the misfit of other
+        # channels: the covariance is widened as a whole by the reduced chi-square, which a
+        # heave missed by 2000 times its variance sets (development world 960030: the front
+        # wheels seen blocked, the depth 0.570 +- 0.108 m)
+        if p.name.endswith(".depth") and sd > 0.1 and not seen:
             return f"its depth is not determined (std {sd:.3f} m)"
         # where an engine meets the barrier is its depth: on two clean scored worlds an
         # engine the data placed at 0.61 +- 0.32 m and 0.66 +- 0.73 m was named
         if p.name.endswith(".gap") and fr.std_data.get(p.name, sd) > 0.1:
             return f"where it meets the barrier is not determined (gap std {fr.std_data.get(p.name, sd):.3f} m)"
     candidate = BY_EFFECT[effect]
-    why, window = _evidence_against(effect, fr, vehicle)
-    if why:
-        return why
+    if against:
+        return against
     why = candidate.implausible(fr, vehicle)
     if not why and candidate.evidence is not None and window is None:
         # what lowered the misfit was then the candidate's parameters (a rear spring), not its physics
@@ -457,12 +464,16 @@ def _prior_conflicts(fr: FitResult) -> str:
             "): it trades against the prior rather than explaining the misfit")
 
 
-def _evidence_against(effect: str, fr: FitResult, vehicle) -> tuple[str, tuple[float, float] | None]:
+def _evidence_against(effect: str, fr: FitResult, vehicle) -> tuple[str, tuple[float, float] | None, bool]:
     """(why the candidate's own evidence check contradicts its fit ``fr`` over the window where
-    it acts, or ''; that window in ms, None where it never acts or has no check)."""
+    it acts, or ''; that window in ms, None where it never acts or has no check; whether the
+    check sees it acting there in a measured channel)."""
     candidate = BY_EFFECT[effect]
     window = effect_window_ms(fr, effect) if candidate.evidence is not None else None
-    return (candidate.evidence(fr, vehicle, window)[0] if window is not None else ""), window
+    if window is None:
+        return "", None, False
+    why, line = candidate.evidence(fr, vehicle, window)
+    return why, window, line.startswith(SEEN)
 
 
 def discover(

@@ -36,18 +36,29 @@ def spin_on_time(t, angle, sigma, x, x_sigma, wheel_radius: float) -> float | No
     """Time (s, the measurement's clock) from which a wheel's ``angle`` (rad, one-sigma
     ``sigma``) runs ahead of rolling with the car's displacement ``x`` (m, ``x_sigma``), or
     None when it never does: the lead (``lead_over_rolling``) exceeds ``SPIN_ON_RAD`` and 3
-    combined sigmas. The time returned is the last sample before that where the lead was
-    still below ``ONSET_SHARE`` of the threshold: where the spinning on began."""
+    combined sigmas, and never falls back below ``ONSET_SHARE`` of that afterwards. The time
+    returned is the last sample before that where the lead was still below ``ONSET_SHARE`` of
+    the threshold: where the spinning on began.
+
+    A wheel that slipped ahead and then fell back behind rolling did not spin on: friction
+    brings a slipping wheel's speed back to the car's, never its angle, so the lead it had
+    only shrinks when the wheel turns slower than rolling, as a wheel that the crushed
+    structure blocks does (development world 960003: its front wheel led by 0.1 rad at 35
+    ms, was blocked and fell 0.16 rad behind; cut from 17 ms on, the blocking went unseen)."""
     t, sigma, x_sigma = (np.asarray(a, float) for a in (t, sigma, x_sigma))
     lead = lead_over_rolling(t, angle, x, wheel_radius)
     if lead is None:
         return None
     ok = np.isfinite(lead) & np.isfinite(sigma) & np.isfinite(x_sigma)
     threshold = np.maximum(SPIN_ON_RAD, 3.0 * np.hypot(sigma, x_sigma / wheel_radius))
-    ahead = np.flatnonzero(ok & (t >= 0.0) & (lead > threshold))
-    if len(ahead) == 0:
+    ahead = ok & (t >= 0.0) & (lead > threshold)
+    fallen_back = ok & (lead < ONSET_SHARE * threshold)
+    # samples from which on the lead never falls back (a cumulative "any" from the end)
+    stays = ~np.flip(np.cumsum(np.flip(fallen_back)) > 0)
+    sustained = np.flatnonzero(ahead & stays)
+    if len(sustained) == 0:
         return None
-    first = ahead[0]
+    first = sustained[0]
     calm = np.flatnonzero(ok[:first] & (lead[:first] < ONSET_SHARE * threshold[:first]))
     return float(t[calm[-1]]) if len(calm) else float(t[first])
 

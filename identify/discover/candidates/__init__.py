@@ -22,7 +22,7 @@ import importlib
 import jax
 import jax.numpy as jnp
 
-from identify.discover.candidates.base import NEVER_REACHED, Candidate
+from identify.discover.candidates.base import NEVER_REACHED, SEEN, Candidate
 from identify.fitting.model import base_parameters, vehicle_value
 from sim import Params
 
@@ -38,7 +38,7 @@ REGISTRY = (
 CANDIDATES: tuple[Candidate, ...] = tuple(importlib.import_module(f"{__name__}.{m}").CANDIDATE for m in REGISTRY)
 BY_EFFECT = {c.effect: c for c in CANDIDATES}
 
-__all__ = ["BY_EFFECT", "CANDIDATES", "NEVER_REACHED", "Candidate", "assumed_in_base", "base_mechanisms", "held_for",
+__all__ = ["BY_EFFECT", "CANDIDATES", "NEVER_REACHED", "SEEN", "Candidate", "assumed_in_base", "base_mechanisms", "held_for",
            "kept_mechanisms", "measured_effects", "neutral_values", "priors_for", "starting_guesses", "superset_spec",
            "superset_template", "with_base_mechanisms"]
 

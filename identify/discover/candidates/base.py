@@ -20,6 +20,7 @@ import numpy as np
 from identify.fitting.model import FreeParameter
 
 NEVER_REACHED = 10.0  # m: a depth the crush never reaches (the mechanism stays off)
+SEEN = "seen: "  # how an evidence line starts when a measured channel shows the mechanism
 DECISIVE_CHI2 = 9.0  # a chi-square difference of 9: three standard deviations
 
 
@@ -111,7 +112,8 @@ class Candidate:
     evidence : callable(fit, vehicle, window_ms) -> (reason, evidence) checking what the
         mechanism implies for a channel measured directly against what that channel shows:
         ``reason`` '' when the candidate may stand, else why not; ``evidence`` one line for
-        the report ("seen: ...", "inferred, not seen: ..."). None: no channel shows it.
+        the report (starting with :data:`SEEN` where a measured channel shows the mechanism
+        acting, "inferred, not seen: ..." where none can). None: no channel shows it.
     active : callable(fit) -> bool per output sample of ``fit.trajectory``: where the fitted
         mechanism acts; None: where it changes the loading force (:func:`loading_force_differs`).
     implausible : callable(fit, vehicle) -> '' or why a fit of this candidate is not a

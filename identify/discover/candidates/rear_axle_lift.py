@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identify.discover.candidates.base import DECISIVE_CHI2, Candidate, parameter, samples_in_window, signal_chi2s
+from identify.discover.candidates.base import DECISIVE_CHI2, SEEN, Candidate, parameter, samples_in_window, signal_chi2s
 from identify.fitting.model import vehicle_value
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
@@ -53,7 +53,7 @@ def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
         return (f"the recording shows the rear hub on the ground in {span} (it rose {1e3 * np.ptp(height):.0f} mm;"
                 f" the candidate lifts it {1e3 * np.ptp(lift):.0f} mm: chi2 {lifted:.0f} lifted against"
                 f" {grounded:.0f} on the ground)"), ""
-    return "", (f"seen: the rear hub rises with the model's lift in {span} (chi2 {lifted:.0f} lifted against"
+    return "", (SEEN + f"the rear hub rises with the model's lift in {span} (chi2 {lifted:.0f} lifted against"
                 f" {grounded:.0f} on the ground, over {int(ok.sum())} samples)")
 
 
