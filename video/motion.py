@@ -607,15 +607,6 @@ def impact_speed(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, stop: int
     return float(coef[1]), float(np.sqrt(cov[1, 1] * chi))
 
 
-#: Exponents of the onset model ``x = a + b (t - tc) - c max(0, t - tc)^p`` tried, the best
-#: fit's kept: 3, a force growing from zero with the crush. With 2 (a force that jumps at
-#: contact) tried too, the onset came within 1 ms of the truth on 11 of the 40 development
-#: films (960000-960039; 90th percentile 7.1 ms), where 2 fitted the first milliseconds of a
-#: force growing faster than the crush better and put the onset up to 9 ms late; with 3
-#: alone on 16 (4.2 ms).
-ONSET_EXPONENTS = (3.0,)
-
-
 def _onset_sse(t, x, w, tc, p):
     d = np.maximum(t - tc, 0.0) ** p
     A = np.stack([np.ones_like(t), t - tc, -d], axis=1) * w[:, None]
@@ -630,8 +621,9 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
 
     A first guess is where the speed (differences of ``x`` over 5 frames) falls 2 %
     below the approach speed and stays there for 10 samples; the onset model ``x = a + b (t - tc) - c max(0, t -
-    tc)^p`` (:data:`ONSET_EXPONENTS`) is then fitted for every ``tc`` on a grid of 0.02
-    frame around it, by weighted linear least squares in ``a, b, c``; the best ``(tc, p)`` wins.
+    tc)^p`` (p = 2: a force that jumps at contact; p = 3: a force growing with crush) is
+    then fitted for every ``tc`` on a grid of 0.02 frame around it, by weighted linear
+    least squares in ``a, b, c``; the best ``(tc, p)`` wins.
 
     Parameters
     ----------
@@ -678,7 +670,7 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
     dt = 1.0 / fps
     grid = np.arange(lo, guess + 2 * dt, 0.02 * dt)
     best = (np.inf, None, None)
-    for p in ONSET_EXPONENTS:
+    for p in (2.0, 3.0):
         tc, sse = _coarse_to_fine(grid, lambda tc, p=p: _onset_sse(ts, xs, ws, tc, p)[0])
         if sse < best[0]:
             best = (sse, tc, p)
