@@ -47,8 +47,8 @@ import numpy as np
 
 from identify.discover.candidates import (
     BY_EFFECT,
-    SEEN,
     CANDIDATES,
+    SEEN,
     held_for,
     kept_mechanisms,
     measured_effects,

@@ -59,7 +59,7 @@ def spin_on_time(t, angle, sigma, x, x_sigma, wheel_radius: float) -> float | No
     if len(sustained) == 0:
         return None
     first = sustained[0]
-    calm = np.flatnonzero(ok[:first] & (lead[:first] < ONSET_SHARE * threshold[:first]))
+    calm = np.flatnonzero(fallen_back[:first])
     return float(t[calm[-1]]) if len(calm) else float(t[first])
 
 
