@@ -544,7 +544,8 @@ def test_an_unsettled_candidate_is_told_apart_from_one_the_recording_refutes():
     # the status line names what was not asked, after what was found
     from identify.discover.loop import _status
 
-    analysis = types.SimpleNamespace(white=False, windows=[types.SimpleNamespace(channel="z_m")])
+    analysis = types.SimpleNamespace(white=False, windows=[types.SimpleNamespace(channel="z_m")],
+                                     correlated_channels=lambda: ["z_m"])
     said = _status([], analysis, analysis, [list(out.values())])
     assert said.startswith("no missing physics justified: residuals are not white in z_m")
     assert said.endswith("; not settled: engine_impact (the fit ended worse than the model without it: no verdict)")
@@ -792,3 +793,23 @@ def test_only_models_the_recording_does_not_rule_out_are_alternatives(monkeypatc
     # the missing force's linearised refit far from the fit (a stiffness below zero) is no model
     missing.parameter_shift = {"k_compression": -1.6e6}
     assert loop.alternatives([accepted], fits, current, missing, vehicle=None) == []
+
+
+def test_residuals_without_a_window_are_not_called_white_noise_when_they_are_correlated():
+    """Development film 960016 (an engine reaching the barrier; x off by -9 then +5 mm) was
+    reported as "residuals are white noise in all channels": no window stood out of the
+    residuals' own wander. Its residuals fail the Ljung-Box test; the status says so."""
+    from identify.discover.loop import _status
+    from identify.fitting.residuals import ChannelAnalysis, ResidualAnalysis, ljung_box_p
+
+    rng = np.random.default_rng(5)
+    white = rng.normal(size=400)
+    wander = np.convolve(rng.normal(size=420), np.ones(21) / np.sqrt(21), mode="valid")
+    channels = {name: ChannelAnalysis(name, 1.0, float(z @ z), len(z), ljung_box_p(z), 1.0, ())
+                for name, z in (("x_m", wander), ("pitch_rad", white))}
+    said = _status([], ResidualAnalysis(channels, {}), ResidualAnalysis(channels, {}))
+    assert said.startswith("no missing physics found") and "not white noise in x_m (" in said, said
+    assert "pitch_rad" not in said
+    quiet = {"pitch_rad": channels["pitch_rad"]}
+    assert _status([], ResidualAnalysis(quiet, {}), ResidualAnalysis(quiet, {})) == \
+        "no missing physics: residuals are white noise in all channels"

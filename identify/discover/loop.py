@@ -800,7 +800,16 @@ def _found(discoveries, before: ResidualAnalysis, after: ResidualAnalysis) -> st
     unexplained = [d for d in discoveries if d["effect"] == "unexplained"]
     if not discoveries:
         if after.white:
-            return "no missing physics: residuals are white noise in all channels"
+            correlated = after.correlated_channels()
+            if not correlated:
+                return "no missing physics: residuals are white noise in all channels"
+            # no window stands out of the residuals' own wander, but they are not white: the
+            # tracking's correlated errors, or a misfit spread over the whole recording, which
+            # the window search (local misfits) does not name (development film 960016: an
+            # engine reaching the barrier, x off by -9 then +5 mm, had been called white noise)
+            return ("no missing physics found: no window of misfit stands out of the residuals' own wander, but "
+                    "they are not white noise in " + ", ".join(correlated) + " (correlated tracking errors, or a "
+                    "misfit spread over the whole recording that no candidate explained)")
         chans = sorted({w.channel for w in after.windows})
         return ("no missing physics justified: residuals are not white in " + ", ".join(chans)
                 + ", but neither a candidate mechanism nor an extra force lowers the BIC enough")

@@ -31,6 +31,8 @@ from scipy import stats
 from identify.fitting.least_squares import integrated_autocorrelation_time
 
 PHASES = ("approach", "compression", "restitution", "after separation")
+#: Ljung-Box p-value below which a channel's residuals are said not to be white noise.
+WHITE_P = 1e-3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,6 +91,11 @@ class ResidualAnalysis:
     def white(self) -> bool:
         """No channel has a window of systematic misfit."""
         return all(c.white for c in self.channels.values())
+
+    def correlated_channels(self, p_value: float = WHITE_P) -> list[str]:
+        """Channels whose residuals the Ljung-Box test finds not white (p below ``p_value``),
+        windows or not."""
+        return [name for name, c in self.channels.items() if c.ljung_box_p < p_value]
 
     @property
     def windows(self) -> list[Window]:
