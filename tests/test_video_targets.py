@@ -214,17 +214,23 @@ def test_refine_symmetric_does_not_lock_to_pixels_on_a_sharp_target():
     assert max(errs) < 0.03
 
 
-def test_the_two_parameter_step_is_least_squares_and_none_when_ill_conditioned():
+def test_the_two_parameter_step_is_least_squares_and_nan_when_ill_conditioned():
     from video.targets import _solve_normal
 
     rng = np.random.default_rng(2)
-    for _ in range(20):
-        jac, rhs = rng.normal(size=(30, 2)), rng.normal(size=30)
-        np.testing.assert_allclose(_solve_normal(jac, rhs), np.linalg.lstsq(jac, rhs, rcond=None)[0], rtol=1e-9)
+    jac, rhs = rng.normal(size=(20, 30, 2)), rng.normal(size=(20, 30))
+    steps = _solve_normal(jac, rhs)
+    for j, r, s in zip(jac, rhs, steps):
+        np.testing.assert_allclose(s, np.linalg.lstsq(j, r, rcond=None)[0], rtol=1e-9)
+        np.testing.assert_array_equal(_solve_normal(j, r), s)
     # a straight edge: every gradient along one line (condition number 1e10)
     edge = np.column_stack([np.ones(30), np.ones(30) + 1e-5 * rng.normal(size=30)])
-    assert np.linalg.cond(edge.T @ edge) > 1e8 and _solve_normal(edge, rng.normal(size=30)) is None
-    assert _solve_normal(np.zeros((30, 2)), rng.normal(size=30)) is None
+    assert np.linalg.cond(edge.T @ edge) > 1e8 and np.isnan(_solve_normal(edge, rng.normal(size=30))).all()
+    assert np.isnan(_solve_normal(np.zeros((30, 2)), rng.normal(size=30))).all()
+    # one ill-conditioned system among good ones spoils only its own step
+    both = _solve_normal(np.stack([jac[0], edge]), np.stack([rhs[0], rng.normal(size=30)]))
+    np.testing.assert_array_equal(both[0], steps[0])
+    assert np.isnan(both[1]).all()
 
 
 def test_refine_symmetric_says_nan_on_a_flat_patch():
@@ -441,3 +447,82 @@ def test_the_quadrant_target_detector_says_where_and_how_clean():
     assert np.all((q >= 0) & (q <= 1))
     assert q[0] > q[1]          # the clean target is the cleaner find
     assert len(det.detect(np.full((80, 80), 0.5))) == 0
+
+
+def _batch_scene():
+    """Six targets of radii 4-14 px, each in its own image (two smeared by motion, one
+    half off its image's edge, one a flat patch), with starts up to 1.2 px off."""
+    rng = np.random.default_rng(5)
+    radii = np.array([4.3, 6.0, 8.4, 10.3, 14.0, 7.0])
+    images, centres = [], []
+    for k, r in enumerate(radii):
+        c = np.array([36.0, 34.0]) + rng.uniform(-0.5, 0.5, 2)
+        img = draw_targets((70, 74), [c], [r], [rng.uniform(0, np.pi)])
+        if k in (1, 3):
+            img = cv2.filter2D(img, -1, np.full((1, 5), 0.2, np.float32))
+        if k == 5:
+            img = np.full((70, 74), 0.5, np.float32)
+        images.append(img.astype(np.float32))
+        centres.append(c)
+    images[2] = np.ascontiguousarray(images[2][:, 30:])  # the target at the image's left edge
+    centres[2] = centres[2] - [30.0, 0.0]
+    starts = np.array(centres) + rng.uniform(-1.2, 1.2, (len(radii), 2))
+    return images, starts, radii
+
+
+def test_targets_refined_together_get_what_each_gets_alone():
+    """The batched refinements (the tracker follows all targets of a frame together) give
+    each target what it gets refined alone: windows of different sizes, targets that stop
+    after different numbers of steps, a window off the image, a flat patch."""
+    from video.targets import (orientations, refine_centres_and_symmetry, refine_gradients,
+                               refine_symmetric_each, symmetry_errors_each, target_radii)
+
+    images, starts, radii = _batch_scene()
+    config = TargetConfig()
+    grad = refine_gradients(images, starts, radii)
+    sym = refine_symmetric_each(images, starts, radii)
+    centre, errors = refine_centres_and_symmetry(images, starts, radii)
+    found = np.isfinite(centre[:, 0])
+    assert found.sum() >= 3 and not found[5] and np.isfinite(errors[:, 0]).any()
+    at = symmetry_errors_each([images[k] for k in np.flatnonzero(found)], centre[found], radii[found])
+    angle = orientations(images, starts, radii)
+    for k, (img, s, r) in enumerate(zip(images, starts, radii)):
+        np.testing.assert_allclose(grad[k], refine_gradient(img, s, r), rtol=0, atol=1e-9)
+        np.testing.assert_allclose(sym[k], refine_symmetric(img, s, r), rtol=0, atol=1e-9)
+        one, one_errors = refine_centre_and_symmetry(img, s, r)
+        np.testing.assert_allclose(centre[k], one, rtol=0, atol=1e-9)
+        assert (one_errors is None) == np.isnan(errors[k, 0])
+        if one_errors is not None:
+            np.testing.assert_allclose(errors[k], one_errors, rtol=0, atol=1e-12)
+        assert abs(angle[k] - orientation(img, s, r)) < 1e-12
+    for row, k in zip(at, np.flatnonzero(found)):
+        np.testing.assert_allclose(row, symmetry_errors(images[k], centre[k], radii[k]), rtol=0, atol=1e-12)
+    # rings of each target's own radii (a radius expected too small: none falls to half)
+    for factor in (1.0, 0.5):
+        radius, contrast = target_radii(images, starts, config, expected=factor * radii)
+        for k in range(len(radii)):
+            np.testing.assert_allclose([radius[k], contrast[k]],
+                                       target_radius(images[k], starts[k], config, expected=factor * radii[k]),
+                                       rtol=0, atol=1e-12)
+    # the rings of an unknown radius, as the detector's first look at many candidates takes them
+    np.testing.assert_allclose(np.column_stack(target_radii(images[:2], starts[:2], config)),
+                               [target_radius(images[k], starts[k], config) for k in range(2)], rtol=0, atol=1e-12)
+
+
+def test_targets_followed_together_are_found_as_each_alone():
+    """``video.follow.follow_targets`` finds a frame's targets together as it finds each
+    alone, the ones whose prediction fails (searched for) included."""
+    from video.follow import TrackerConfig, follow_targets
+
+    images, starts, radii = _batch_scene()
+    truth = starts.copy()
+    preds = truth + np.array([[0.2, 0.1], [4.0, -3.0], [0.1, 0.3], [-0.3, 0.2], [5.0, 1.0], [0.0, 0.0]])
+    contrasts, search = np.full(6, 0.45), np.full(6, 8.0)
+    config = TrackerConfig()
+    c, con, a = follow_targets(images, preds, radii, contrasts, search, config)
+    np.testing.assert_array_equal(np.isfinite(c[:, 0]), [True, True, False, True, True, False])
+    for k in range(6):
+        one = follow_targets(images[k:k + 1], preds[k:k + 1], radii[k:k + 1], contrasts[k:k + 1], search[k:k + 1],
+                             config)
+        np.testing.assert_allclose(np.concatenate([c[k], [con[k], a[k]]]),
+                                   np.concatenate([one[0][0], one[1], one[2]]), rtol=0, atol=1e-9)

@@ -8,7 +8,9 @@ around the prediction, the centre refined (``video.targets.refine_centre``: grad
 orthogonality, then point symmetry) and the detection checked (radius, contrast,
 quadrant symmetry). A detection that fails the checks is not used: the target is lost
 in that frame (NaN, and a note names the frames), never interpolated. The pattern's
-orientation is unwrapped over frames (hub targets: the wheel's spin angle).
+orientation is unwrapped over frames (hub targets: the wheel's spin angle). The targets of
+a frame are refined and checked together (``follow_targets``), each in its own crop of
+the frame, as each would be alone.
 """
 
 from __future__ import annotations
@@ -26,15 +28,15 @@ from video.targets import (
     Detections,
     TargetConfig,
     centre_sigma,
-    orientation,
-    refine_centre_and_symmetry,
+    orientations,
+    refine_centres_and_symmetry,
     saddle_response,
-    symmetry_errors,
-    target_radius,
+    symmetry_errors_each,
+    target_radii,
     to_gray,
 )
 
-__all__ = ["TrackerConfig", "TargetTracks", "follow_target", "track_targets", "prefetch"]
+__all__ = ["TrackerConfig", "TargetTracks", "follow_targets", "track_targets", "prefetch"]
 
 Progress = Callable[[int, int, str], None]
 
@@ -183,44 +185,60 @@ def _wrap_half(a: float) -> float:
     return float((a + np.pi / 2) % np.pi - np.pi / 2)
 
 
-def follow_target(gray: np.ndarray, pred: np.ndarray, radius: float, contrast: float,
-                  search_px: float, config: TrackerConfig
-                  ) -> tuple[np.ndarray, float, float] | None:
-    """Find one known target near its predicted position.
+def follow_targets(grays, preds: np.ndarray, radii: np.ndarray, contrasts: np.ndarray,
+                   search_px: np.ndarray, config: TrackerConfig
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Find K known targets near their predicted positions, each in its own image.
 
     Parameters
     ----------
-    gray : (H, W) float32
-        Frame (or a crop of it around the target), grey levels in [0, 1].
-    pred : (2,) float
-        Predicted centre in ``gray``'s pixel coordinates, px.
-    radius, contrast : float
-        The target's radius (px) and contrast in the first frame.
-    search_px : float
-        Search half-width around ``pred``, px.
+    grays : sequence of K (H, W) float32
+        Frame (or a crop of it around the target) of each target, grey levels in [0, 1].
+    preds : (K, 2) float
+        Predicted centres, each in its own image's pixel coordinates, px.
+    radii, contrasts : (K,) float
+        The targets' radii (px) and contrasts in the first frame.
+    search_px : (K,) float
+        Search half-width around each prediction, px.
     config : TrackerConfig
 
     Returns
     -------
-    (centre (2,) px, contrast now, orientation rad in (-pi/2, pi/2]) or None if the
-    target is not found or fails a check. The prediction itself is refined first; if
-    that fails, candidates are the saddle-response maxima within ``search_px`` of the
-    prediction, nearest first (at most four are checked).
+    centres (K, 2) px, contrasts now (K,), orientations (K,) rad in (-pi/2, pi/2]; NaN
+    where a target is not found or fails a check. The predictions are refined first,
+    all together; where that fails, candidates are the saddle-response maxima within
+    ``search_px`` of the prediction, nearest first (at most four are checked).
     """
-    H, W = gray.shape
+    preds = np.asarray(preds, dtype=float)
+    radii, contrasts, search_px = (np.asarray(a, dtype=float) for a in (radii, contrasts, search_px))
     # a good prediction (smooth motion) is refined directly; the search is the fallback
-    got = _check(gray, np.asarray(pred, float), radius, contrast, config)
-    if got is not None and np.hypot(*(got[0] - pred)) < min(search_px, 0.3 * radius):
-        return got[0], got[1], orientation(gray, got[0], radius)
+    c, con = _check(grays, preds, radii, contrasts, config)
+    held = np.hypot(*(c - preds).T) < np.minimum(search_px, 0.3 * radii)
+    for k in np.flatnonzero(~held):
+        c[k], con[k] = _search(grays[k], preds[k], radii[k], contrasts[k], search_px[k], config)
+    angle = np.full(len(c), np.nan)
+    found = np.flatnonzero(np.isfinite(c[:, 0]))
+    if found.size:
+        angle[found] = orientations([grays[k] for k in found], c[found], radii[found])
+    return c, con, angle
+
+
+def _search(gray: np.ndarray, pred: np.ndarray, radius: float, contrast: float,
+            search_px: float, config: TrackerConfig) -> tuple[np.ndarray, float]:
+    """The first of the saddle-response maxima within ``search_px`` (px) of ``pred`` (px),
+    nearest first (at most four), that passes :func:`_check`: (centre (2,) px, contrast),
+    NaN where none does."""
+    none = np.full(2, np.nan), np.nan
+    H, W = gray.shape
     half = search_px + 1.2 * radius + 3
     u0, v0 = int(np.floor(pred[0] - half)), int(np.floor(pred[1] - half))
     u1, v1 = int(np.ceil(pred[0] + half)) + 1, int(np.ceil(pred[1] + half)) + 1
     if u1 <= 0 or v1 <= 0 or u0 >= W or v0 >= H:
-        return None
+        return none
     u0c, v0c, u1c, v1c = max(u0, 0), max(v0, 0), min(u1, W), min(v1, H)
     roi = gray[v0c:v1c, u0c:u1c]
     if roi.shape[0] < 5 or roi.shape[1] < 5:
-        return None
+        return none
     resp = saddle_response(roi, max(1.5, min(0.2 * radius, 3.0)))
     ys = np.arange(v0c, v1c)[:, None]
     xs = np.arange(u0c, u1c)[None, :]
@@ -230,29 +248,35 @@ def follow_target(gray: np.ndarray, pred: np.ndarray, radius: float, contrast: f
         & (d2 <= search_px**2 + 2)
     pv, pu = np.nonzero(peaks)
     order = np.argsort(d2[pv, pu])[:4]
-    for j in order:
-        start = np.array([pu[j] + u0c, pv[j] + v0c], dtype=float)
-        got = _check(gray, start, radius, contrast, config)
-        if got is not None:
-            c, con = got
-            return c, con, orientation(gray, c, radius)
-    return None
+    if not order.size:
+        return none
+    starts = np.stack([pu[order] + u0c, pv[order] + v0c], axis=1).astype(float)
+    n = len(starts)
+    c, con = _check([gray] * n, starts, np.full(n, radius), np.full(n, contrast), config)
+    passed = np.flatnonzero(np.isfinite(c[:, 0]))
+    return (c[passed[0]], con[passed[0]]) if passed.size else none
 
 
-def _check(gray: np.ndarray, start: np.ndarray, radius: float, contrast: float,
-           config: TrackerConfig) -> np.ndarray | None:
-    """Refine a candidate centre and check it is the target: (centre, contrast) or None."""
-    c, errors = refine_centre_and_symmetry(gray, start, radius)
-    if not np.all(np.isfinite(c)) or np.hypot(*(c - start)) > 0.5 * radius:
-        return None
-    r, con = target_radius(gray, c, config.detect, expected=radius)
-    if not np.isfinite(r) or abs(r / radius - 1.0) > config.radius_tolerance:
-        return None
-    if con < config.min_contrast_ratio * contrast:
-        return None
-    e1, e2 = errors if errors is not None else symmetry_errors(gray, c, radius)
-    if e1 > config.max_point_error or e2 > config.max_quarter_error:
-        return None
+def _check(grays, starts: np.ndarray, radii: np.ndarray, contrasts: np.ndarray,
+           config: TrackerConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Refine K candidate centres (K, 2) px, each in its own image, and check each is its
+    target (radius, contrast, symmetry against its first frame's ``radii`` px and
+    ``contrasts``): centres (K, 2) px and contrasts (K,), NaN where rejected."""
+    c, errors = refine_centres_and_symmetry(grays, starts, radii)
+    con = np.full(len(c), np.nan)
+    ok = np.flatnonzero(np.hypot(*(c - starts).T) <= 0.5 * radii)
+    if ok.size:
+        r, con_ok = target_radii([grays[k] for k in ok], c[ok], config.detect, expected=radii[ok])
+        con[ok] = con_ok
+        ok = ok[(np.abs(r / radii[ok] - 1.0) <= config.radius_tolerance)
+                & (con_ok >= config.min_contrast_ratio * contrasts[ok])]
+    unmeasured = ok[np.isnan(errors[ok, 0])]
+    if unmeasured.size:
+        errors[unmeasured] = symmetry_errors_each([grays[k] for k in unmeasured], c[unmeasured], radii[unmeasured])
+    ok = ok[(errors[ok, 0] <= config.max_point_error) & (errors[ok, 1] <= config.max_quarter_error)]
+    rejected = np.ones(len(c), bool)
+    rejected[ok] = False
+    c[rejected], con[rejected] = np.nan, np.nan
     return c, con
 
 
@@ -271,7 +295,7 @@ def _predict(uv: np.ndarray, angle: np.ndarray, i: int, k: int, last: np.ndarray
     p1 = uv[L, k]
     a1 = angle[L, k]
     prev = L - 1
-    if not (prev >= 0 and np.isfinite(uv[prev, k, 0])):
+    if not _has_velocity(uv, k, L):
         return p1 + _neighbour_displacement(uv, i, k, L), a1, gap
     vel = p1 - uv[prev, k]
     spin = angle[L, k] - angle[prev, k]
@@ -290,6 +314,13 @@ def _predict(uv: np.ndarray, angle: np.ndarray, i: int, k: int, last: np.ndarray
             step = uv[i - 1, j] - uv[i - 2, j] if i - 2 >= 0 and np.isfinite(uv[i - 2, j, 0]) else vel
             return p1 + (uv[i - 1, j] - uv[L, j]) + step, a1 + spin * gap, gap
     return p1 + vel * gap, a1 + spin * gap, gap
+
+
+def _has_velocity(uv: np.ndarray, k: int, L: int) -> bool:
+    """Whether target ``k``, last seen in frame ``L``, was seen in frame ``L - 1`` too (a
+    velocity of its own; without one, :func:`_predict` moves it with a neighbour found in
+    the frame being tracked)."""
+    return L >= 1 and bool(np.isfinite(uv[L - 1, k, 0]))
 
 
 def _neighbour_displacement(uv: np.ndarray, i: int, k: int, L: int) -> np.ndarray:
@@ -312,6 +343,50 @@ def _neighbour_displacement(uv: np.ndarray, i: int, k: int, L: int) -> np.ndarra
         return uv[i, j] - uv[L, j]
     step = uv[i - 1, j] - uv[i - 2, j] if i - 2 >= 0 and np.isfinite(uv[i - 2, j, 0]) else 0.0
     return uv[i - 1, j] - uv[L, j] + step
+
+
+def _job(frame: np.ndarray, uv: np.ndarray, angle: np.ndarray, i: int, k: int, last: np.ndarray,
+         first: Detections, config: TrackerConfig):
+    """Target ``k``'s search in frame ``i``: (k, grey crop of the frame around its
+    prediction, the crop's origin (2,) px, the prediction in the crop (2,) px, the search
+    half-width px, the predicted orientation rad); None where the prediction is unknown or
+    the crop is under 8 px."""
+    pred, a_pred, gap = _predict(uv, angle, i, k, last)
+    if not np.all(np.isfinite(pred)):
+        return None
+    H, W = frame.shape[:2]
+    search = min(config.search_px + config.search_growth_px * (gap - 1), config.max_search_px)
+    half = int(np.ceil(search + 2.2 * first.radii[k] + 8))
+    u0, v0 = max(int(pred[0]) - half, 0), max(int(pred[1]) - half, 0)
+    u1, v1 = min(int(pred[0]) + half + 1, W), min(int(pred[1]) + half + 1, H)
+    if u1 - u0 < 8 or v1 - v0 < 8:
+        return None
+    off = np.array([u0, v0], dtype=float)
+    return k, to_gray(frame[v0:v1, u0:u1]), off, pred - off, search, a_pred
+
+
+def _follow_jobs(jobs: list, first: Detections, config: TrackerConfig) -> list:
+    """:func:`follow_targets` on the :func:`_job` s of one frame: (k, centre (2,) px in the
+    frame, contrast, orientation rad, predicted orientation rad) of each job, NaN where
+    the target was not found."""
+    ks = np.array([j[0] for j in jobs])
+    c, con, a = follow_targets([j[1] for j in jobs], np.array([j[3] for j in jobs]), first.radii[ks],
+                               first.contrasts[ks], np.array([j[4] for j in jobs]), config)
+    return [(j[0], c[n] + j[2], con[n], a[n], j[5]) for n, j in enumerate(jobs)]
+
+
+def _record(found: list, i: int, uv: np.ndarray, sig: np.ndarray, angle: np.ndarray, last: np.ndarray,
+            unit_noise: np.ndarray, first: Detections) -> None:
+    """Write what :func:`_follow_jobs` found in frame ``i`` into the tracks ``uv``, ``sig``,
+    ``angle`` (orientation unwrapped against its prediction) and ``last``; ``unit_noise``
+    (K,) px: each centre's sigma at its first frame's contrast."""
+    for k, c, con, a, a_pred in found:
+        if not np.isfinite(c[0]):
+            continue
+        uv[i, k] = c
+        sig[i, k] = np.hypot(unit_noise[k] * first.contrasts[k] / max(con, 1e-6), SIGMA_FLOOR_PX)
+        angle[i, k] = a_pred + _wrap_half(a - a_pred)
+        last[k] = i
 
 
 def track_targets(frames: Iterable[np.ndarray], n_frames: int, first: Detections,
@@ -357,30 +432,18 @@ def track_targets(frames: Iterable[np.ndarray], n_frames: int, first: Detections
                              for c, r in zip(first.centres, first.radii)])
             sig[0] = np.hypot(unit * nz, SIGMA_FLOOR_PX)
             continue
-        H, W = frame.shape[:2]
+        # targets are followed together, except that one moving with a neighbour waits
+        # for the targets before it (its prediction may take theirs in this frame)
+        jobs: list = []
         for k in range(K):
-            pred, a_pred, gap = _predict(uv, ang, i, k, last)
-            if not np.all(np.isfinite(pred)):
-                continue
-            search = min(config.search_px + config.search_growth_px * (gap - 1),
-                         config.max_search_px)
-            R = first.radii[k]
-            half = int(np.ceil(search + 2.2 * R + 8))
-            u0, v0 = max(int(pred[0]) - half, 0), max(int(pred[1]) - half, 0)
-            u1, v1 = min(int(pred[0]) + half + 1, W), min(int(pred[1]) + half + 1, H)
-            if u1 - u0 < 8 or v1 - v0 < 8:
-                continue
-            crop = to_gray(frame[v0:v1, u0:u1])
-            off = np.array([u0, v0], dtype=float)
-            found = follow_target(crop, pred - off, R, first.contrasts[k], search, config)
-            if found is None:
-                continue
-            c, con, a = found
-            uv[i, k] = c + off
-            sig[i, k] = np.hypot(unit[k] * nz * first.contrasts[k] / max(con, 1e-6),
-                                 SIGMA_FLOOR_PX)
-            ang[i, k] = a_pred + _wrap_half(a - a_pred)
-            last[k] = i
+            if jobs and not _has_velocity(uv, k, last[k]):
+                _record(_follow_jobs(jobs, first, config), i, uv, sig, ang, last, unit * nz, first)
+                jobs = []
+            job = _job(frame, uv, ang, i, k, last, first, config)
+            if job is not None:
+                jobs.append(job)
+        if jobs:
+            _record(_follow_jobs(jobs, first, config), i, uv, sig, ang, last, unit * nz, first)
         if progress is not None and (i % step == 0 or i == n_frames - 1):
             progress(i + 1, n_frames, "tracking")
     if i + 1 < n_frames:

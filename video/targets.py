@@ -48,15 +48,21 @@ __all__ = [
     "saddle_response",
     "detect_targets",
     "refine_gradient",
+    "refine_gradients",
     "refine_symmetric",
+    "refine_symmetric_each",
     "refine_centre",
     "refine_centre_and_symmetry",
+    "refine_centres_and_symmetry",
     "refine_saddle",
     "refine_opencv",
     "ring_profile",
     "target_radius",
+    "target_radii",
     "orientation",
+    "orientations",
     "symmetry_errors",
+    "symmetry_errors_each",
     "centre_sigma",
     "gradient_smoothing",
 ]
@@ -184,6 +190,41 @@ def _sample(gray: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out.reshape(shape)
 
 
+def _sample_each(grays, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Bilinear samples of each image ``grays[k]`` at its own float positions ``u[k], v[k]``
+    (px, arrays of shape (K, rows, cols), each side under 32767), as float64 (K, rows,
+    cols). Each image is sampled in its own pixel frame, so a target gets the very samples
+    it gets alone."""
+    mu = np.asarray(u, dtype=np.float32)
+    mv = np.asarray(v, dtype=np.float32)
+    return np.array([cv2.remap(g, a, b, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+                     for g, a, b in zip(grays, mu, mv)], dtype=float)
+
+
+def _as_targets(centres, radii) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (K, 2) float64 px and radii (K,) float64 px of K targets (one (2,) centre
+    and a scalar radius make K = 1)."""
+    return np.asarray(centres, dtype=float).reshape(-1, 2), np.asarray(radii, dtype=float).reshape(-1)
+
+
+def _ring_points(centres: np.ndarray, radii: np.ndarray, n_angles: int) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (u, v), px, of ``n_angles`` samples on each ring of ``radii`` (px) around
+    ``centres`` (``[u, v]`` on the last axis): shape ``centres.shape[:-1] + radii.shape +
+    (n_angles,)`` where ``radii`` is (R,), and (K, R, n_angles) where it is (K, R), one row
+    of rings per centre."""
+    cos, sin, _ = _ring_angles(n_angles)
+    c = np.asarray(centres, dtype=float)
+    r = np.asarray(radii, dtype=float)[..., None]
+    return c[..., 0, None, None] + r * cos, c[..., 1, None, None] + r * sin
+
+
+def _harmonic(vals: np.ndarray) -> np.ndarray:
+    """``mean_j vals_j exp(-2i theta_j)`` over the last axis (samples evenly round a ring)."""
+    _, _, phasor = _ring_angles(vals.shape[-1])
+    # real products: a complex one over thousands of rings took 40 times as long
+    return vals @ phasor.real + 1j * (vals @ phasor.imag)
+
+
 def ring_profile(gray: np.ndarray, centre: np.ndarray, radii: np.ndarray,
                  n_angles: int = 48) -> np.ndarray:
     """Second angular harmonic of the intensity on rings around ``centre``.
@@ -204,12 +245,13 @@ def ring_profile(gray: np.ndarray, centre: np.ndarray, radii: np.ndarray,
         ``c2 = mean_j I(theta_j) exp(-2i theta_j)`` per ring. For a quadrant pattern of
         contrast C its modulus is ``C * 2 / pi`` inside the disc (ideal edges).
     """
-    cos, sin, phasor = _ring_angles(n_angles)
-    c = np.asarray(centre, dtype=float)
-    r = np.asarray(radii, dtype=float)[:, None]
-    vals = _sample(gray, c[..., 0, None, None] + r * cos, c[..., 1, None, None] + r * sin).astype(float)
-    # real products: a complex one over thousands of rings took 40 times as long
-    return vals @ phasor.real + 1j * (vals @ phasor.imag)
+    return _harmonic(_sample(gray, *_ring_points(centre, radii, n_angles)).astype(float))
+
+
+def _ring_profile_each(grays, centres: np.ndarray, radii: np.ndarray, n_angles: int) -> np.ndarray:
+    """:func:`ring_profile` of each of K targets in its own image ``grays[k]``, on its own
+    rings ``radii[k]`` ((K, R) px): (K, R) complex128."""
+    return _harmonic(_sample_each(grays, *_ring_points(centres, radii, n_angles)))
 
 
 @lru_cache(maxsize=8)
@@ -235,9 +277,38 @@ def target_radius(gray: np.ndarray, centre: np.ndarray, config: TargetConfig = T
     contrast : float
         Light-minus-dark difference estimated from the harmonic's maximum, [0, 1].
     """
-    radii = _search_radii(config, expected)
-    radius, contrast = _radius_from_rings(np.abs(ring_profile(gray, centre, radii))[None], radii, config)
+    radius, contrast = target_radii([gray], centre, config, None if expected is None else [expected])
     return float(radius[0]), float(contrast[0])
+
+
+def target_radii(grays, centres: np.ndarray, config: TargetConfig = TargetConfig(),
+                 expected: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`target_radius` of K targets together, each in its own image ``grays[k]``.
+
+    Parameters
+    ----------
+    grays : sequence of K (H, W) float32
+    centres : (K, 2) float, px
+    config : TargetConfig
+    expected : (K,) float, optional
+        Each target's rough radius, px.
+
+    Returns
+    -------
+    radius, contrast : (K,) float64
+        px (NaN where the pattern does not reach ``config.min_radius_px``), and [0, 1].
+    """
+    centres = np.asarray(centres, dtype=float).reshape(-1, 2)
+    rough = [None] * len(centres) if expected is None else np.asarray(expected, dtype=float).reshape(-1)
+    rows = [_search_radii(config, e) for e in rough]
+    counts = np.array([len(r) for r in rows])
+    missing = np.arange(counts.max())[None, :] >= counts[:, None]
+    # rows padded with rings of radius 0 (sampled, then left out)
+    radii = np.zeros(missing.shape)
+    radii[~missing] = np.concatenate(rows)
+    amp = np.abs(_ring_profile_each(grays, centres, radii, 48))
+    amp[missing] = np.nan
+    return _radius_from_rings(amp, radii, config)
 
 
 def _search_radii(config: TargetConfig, expected: float | None) -> np.ndarray:
@@ -250,17 +321,18 @@ def _search_radii(config: TargetConfig, expected: float | None) -> np.ndarray:
 def _radius_from_rings(amp: np.ndarray, radii: np.ndarray, config: TargetConfig) -> tuple[np.ndarray, np.ndarray]:
     """Radius (px; NaN where the harmonic never falls to half its maximum beyond it, or
     the radius is under ``config.min_radius_px``) and contrast of each of N candidates from
-    the modulus ``amp`` (N, R) of their quadrant harmonic on rings ``radii`` (R,): see
-    :func:`target_radius`."""
+    the modulus ``amp`` (N, R) of their quadrant harmonic on rings ``radii`` ((R,) or
+    (N, R), px): see :func:`target_radius`. NaN in ``amp`` marks a row's missing rings."""
     n = np.arange(len(amp))
-    k = np.argmax(amp, axis=1)
+    k = np.nanargmax(amp, axis=1)
     peak = amp[n, k]
     below = (np.arange(amp.shape[1])[None, :] >= k[:, None]) & (amp < 0.5 * peak[:, None])
     j = np.argmax(below, axis=1)  # the first ring beyond the peak below half of it (j > k)
     # linear interpolation of the half-maximum crossing between radii[j-1] and radii[j]
     a0, a1 = amp[n, j - 1], amp[n, j]
     frac = (a0 - 0.5 * peak) / np.maximum(a0 - a1, 1e-12)
-    radius = radii[j - 1] + frac * (radii[j] - radii[j - 1])
+    rr = np.broadcast_to(radii, amp.shape)
+    radius = rr[n, j - 1] + frac * (rr[n, j] - rr[n, j - 1])
     radius = np.where(below.any(axis=1) & (radius >= config.min_radius_px), radius, np.nan)
     return radius, peak * np.pi / 2
 
@@ -298,10 +370,17 @@ def orientation(gray: np.ndarray, centre: np.ndarray, radius: float) -> float:
         clockwise on the screen: ``-arg(c2) / 2 - pi / 4``. Turning the pattern clockwise
         by ``a`` adds ``a`` (modulo pi: a quarter turn swaps dark and light).
     """
-    radii = np.linspace(0.35, 0.75, 5) * radius
-    c2 = ring_profile(gray, centre, radii, n_angles=64).sum()
+    return float(orientations([gray], centre, radius)[0])
+
+
+def orientations(grays, centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """:func:`orientation` of K targets together, each in its own image ``grays[k]``
+    (centres (K, 2) px, radii (K,) px): (K,) rad in (-pi/2, pi/2]."""
+    centres, radii = _as_targets(centres, radii)
+    rings = np.linspace(0.35, 0.75, 5)[None, :] * radii[:, None]
+    c2 = _ring_profile_each(grays, centres, rings, 64).sum(axis=1)
     a = -np.angle(c2) / 2.0 - np.pi / 4
-    return float(a + np.pi if a <= -np.pi / 2 else a)
+    return np.where(a <= -np.pi / 2, a + np.pi, a)
 
 
 @lru_cache(maxsize=64)
@@ -325,25 +404,38 @@ def symmetry_errors(gray: np.ndarray, centre: np.ndarray, radius: float,
     breaks both. Clean, noisy, blurred or compressed targets give a point error below
     0.02 (99 % of the rendered test films' samples).
     """
-    h = max(2.0, extent * radius)
-    du, dv, mask = _symmetry_grid(round(h, 2))
-    patch = _sample(gray, centre[0] + du, centre[1] + dv).astype(float)
-    a = np.where(mask, patch - patch[mask].mean(), 0.0)
-    norm = max(float((a * a).sum()), 1e-12)
-    e_point = float(((a - a[::-1, ::-1]) ** 2).sum()) / norm / 2
-    e_quarter = float(((a + a.T[::-1]) ** 2).sum()) / norm / 2  # a.T[::-1]: a turned a quarter
-    return e_point, e_quarter
+    e = symmetry_errors_each([gray], centre, radius, extent)[0]
+    return float(e[0]), float(e[1])
+
+
+def symmetry_errors_each(grays, centres: np.ndarray, radii: np.ndarray,
+                         extent: float = 0.9) -> np.ndarray:
+    """:func:`symmetry_errors` of K targets together, each in its own image ``grays[k]``
+    (centres (K, 2) px, radii (K,) px): (K, 2) point and quarter-turn errors."""
+    centres, radii = _as_targets(centres, radii)
+    grids = [_symmetry_grid(h) for h in np.round(np.maximum(2.0, extent * radii), 2)]
+    du, dv, mask = (np.stack(g) for g in zip(*grids))
+    patch = _sample_each(grays, centres[:, 0, None, None] + du, centres[:, 1, None, None] + dv)
+    mean = (patch * mask).sum(axis=(1, 2)) / mask.sum(axis=(1, 2))
+    a = np.where(mask, patch - mean[:, None, None], 0.0)
+    norm = np.maximum((a * a).sum(axis=(1, 2)), 1e-12)
+    e_point = ((a - a[:, ::-1, ::-1]) ** 2).sum(axis=(1, 2)) / norm / 2
+    e_quarter = ((a + a.transpose(0, 2, 1)[:, ::-1]) ** 2).sum(axis=(1, 2)) / norm / 2  # a quarter turn
+    return np.stack([e_point, e_quarter], axis=1)
 
 
 @lru_cache(maxsize=64)
 def _pair_offsets(h: float, n: int = 11) -> tuple[np.ndarray, np.ndarray]:
     """One offset of each point-symmetric pair ``(d, -d)`` of the ``n x n`` disc grid of
-    half-width ``h`` (the centre left out), px."""
+    half-width ``h`` (the centre left out), px, padded with ``d = 0`` to ``(n * n - 1) / 2``
+    (every half-width gives the same length; the pair ``(0, 0)`` adds nothing to a
+    symmetry error: ``I(c) - I(c)``)."""
     du, dv, mask = _symmetry_grid(h, n)
     one = mask.copy()
     one[n // 2 + 1:, :] = False
     one[n // 2, n // 2:] = False
-    return du[one], dv[one]
+    pad = (n * n - 1) // 2 - int(one.sum())
+    return np.pad(du[one], (0, pad)), np.pad(dv[one], (0, pad))
 
 
 def refine_symmetric(gray: np.ndarray, centre: np.ndarray, radius: float,
@@ -365,58 +457,84 @@ def refine_symmetric(gray: np.ndarray, centre: np.ndarray, radius: float,
     (2,) float64
         Refined ``[u, v]``, or NaNs if the equations are degenerate (a flat patch).
     """
+    return refine_symmetric_each([gray], centre, radius, iterations, extent)[0]
+
+
+def _symmetric_window(gray: np.ndarray, centre: np.ndarray, radius: float, extent: float):
+    """What :func:`refine_symmetric` samples for one target: the picture around ``centre``
+    smoothed by ``gradient_smoothing`` (a crop leaving room for the centre to move), the
+    crop's origin (2,) px, and the pair offsets (du, dv) (m,) px (:func:`_pair_offsets`);
+    None where the crop is under 5 px."""
     h = round(max(2.0, extent * radius), 2)
     du, dv = _pair_offsets(h)
-    m = len(du)
     # bilinear samples of a sharp picture lock to pixels: sample it smoothed (a symmetric
     # kernel keeps the symmetry), in a crop that leaves room for the centre to move
     sm = gradient_smoothing(radius)
     pad = int(np.ceil(h + 4 * sm + 3))
-    iu, iv = int(round(float(centre[0]))), int(round(float(centre[1])))
+    iu, iv = round(float(centre[0])), round(float(centre[1]))
     u0, v0 = max(iu - pad, 0), max(iv - pad, 0)
     crop = gray[v0: iv + pad + 1, u0: iu + pad + 1]
     if crop.shape[0] < 5 or crop.shape[1] < 5:
-        return np.full(2, np.nan)
-    gray = cv2.GaussianBlur(np.ascontiguousarray(crop, dtype=np.float32), (0, 0), sm)
-    origin = np.array([u0, v0], dtype=float)
+        return None
+    smooth = cv2.GaussianBlur(np.ascontiguousarray(crop, dtype=np.float32), (0, 0), sm)
+    return smooth, np.array([u0, v0], dtype=float), du, dv
+
+
+def refine_symmetric_each(grays, centres: np.ndarray, radii: np.ndarray,
+                          iterations: int = 5, extent: float = 0.9) -> np.ndarray:
+    """:func:`refine_symmetric` of K targets together, each in its own image ``grays[k]``
+    (centres (K, 2) px, radii (K,) px): (K, 2) px, NaN rows where degenerate. The
+    Gauss-Newton steps of all targets are taken together; each stops on its own."""
+    centres, radii = _as_targets(centres, radii)
+    out = np.full((len(centres), 2), np.nan)
+    windows = [_symmetric_window(g, c, r, extent) for g, c, r in zip(grays, centres, radii)]
+    idx = np.array([k for k, w in enumerate(windows) if w is not None], dtype=int)
+    if not idx.size:
+        return out
+    smooth = [windows[k][0] for k in idx]
+    origin = np.array([windows[k][1] for k in idx])
+    du = np.array([windows[k][2] for k in idx])
+    dv = np.array([windows[k][3] for k in idx])
     eu = np.array([0.0, 0.5, -0.5, 0.0, 0.0])
     ev = np.array([0.0, 0.0, 0.0, 0.5, -0.5])
-    su = np.concatenate([du[None, :] + eu[:, None], -du[None, :] + eu[:, None]])  # (10, m)
-    sv = np.concatenate([dv[None, :] + ev[:, None], -dv[None, :] + ev[:, None]])
-    c = np.asarray(centre, dtype=float) - origin
+    su = np.concatenate([du[:, None, :] + eu[:, None], -du[:, None, :] + eu[:, None]], axis=1)  # (n, 10, m)
+    sv = np.concatenate([dv[:, None, :] + ev[:, None], -dv[:, None, :] + ev[:, None]], axis=1)
+    c = centres[idx] - origin
+    going = np.arange(len(idx))
     for _ in range(iterations):
-        f = _sample(gray, c[0] + su, c[1] + sv).astype(float)
-        plus, minus = f[:5], f[5:]
-        r = plus[0] - minus[0]
-        jac = np.stack([(plus[1] - plus[2]) - (minus[1] - minus[2]),
-                        (plus[3] - plus[4]) - (minus[3] - minus[4])], axis=1)
-        step = _solve_normal(jac, -r)
-        if m < 3 or step is None:
-            return np.full(2, np.nan)
-        step = np.clip(step, -1.0, 1.0)
-        c += step
-        if np.hypot(*step) < 1e-3:
+        f = _sample_each([smooth[j] for j in going], c[going, 0, None, None] + su[going],
+                         c[going, 1, None, None] + sv[going])
+        plus, minus = f[:, :5], f[:, 5:]
+        r = plus[:, 0] - minus[:, 0]
+        jac = np.stack([(plus[:, 1] - plus[:, 2]) - (minus[:, 1] - minus[:, 2]),
+                        (plus[:, 3] - plus[:, 4]) - (minus[:, 3] - minus[:, 4])], axis=-1)
+        step = np.clip(_solve_normal(jac, -r), -1.0, 1.0)
+        c[going] += step  # a degenerate step makes the centre NaN
+        moving = np.hypot(step[:, 0], step[:, 1]) >= 1e-3
+        going = going[moving]
+        if not going.size:
             break
-    return c + origin
+    out[idx] = c + origin
+    return out
 
 
-def _solve_normal(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
-    """The least-squares step ``(J^T J)^-1 J^T rhs`` of a two-parameter Gauss-Newton, or
-    None where ``J^T J`` is singular or its condition number exceeds 1e8 (in closed form:
-    a 2 x 2 system, where ``numpy.linalg`` spent most of its time checking its arguments)."""
-    a00, a01, a11 = float(jac[:, 0] @ jac[:, 0]), float(jac[:, 0] @ jac[:, 1]), float(jac[:, 1] @ jac[:, 1])
+def _solve_normal(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """The least-squares steps ``(J^T J)^-1 J^T rhs`` of two-parameter Gauss-Newtons
+    (``jac`` (..., m, 2), ``rhs`` (..., m)): (..., 2), NaN where ``J^T J`` is singular or
+    its condition number exceeds 1e8 (in closed form: 2 x 2 systems, where
+    ``numpy.linalg`` spent most of its time checking its arguments)."""
+    (a00, a01), (_, a11) = np.einsum("...mi,...mj->ij...", jac, jac)
+    b0, b1 = np.einsum("...mi,...m->i...", jac, rhs)
     trace = a00 + a11
-    if not trace > 0.0:
-        return None
-    # both sides divided by the trace: the determinant neither under- nor overflows
-    a00, a01, a11 = a00 / trace, a01 / trace, a11 / trace
-    half_gap = np.hypot(0.5 * (a00 - a11), a01)
-    largest, least = 0.5 + half_gap, 0.5 - half_gap
-    if not least * 1e8 >= largest or not least > 0.0:
-        return None
-    b0, b1 = float(jac[:, 0] @ rhs) / trace, float(jac[:, 1] @ rhs) / trace
-    det = a00 * a11 - a01 * a01
-    return np.array([(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # both sides divided by the trace: the determinant neither under- nor overflows
+        a00, a01, a11, b0, b1 = a00 / trace, a01 / trace, a11 / trace, b0 / trace, b1 / trace
+        half_gap = np.hypot(0.5 * (a00 - a11), a01)
+        largest, least = 0.5 + half_gap, 0.5 - half_gap
+        ok = (trace > 0.0) & (least * 1e8 >= largest) & (least > 0.0)
+        det = a00 * a11 - a01 * a01
+        step = np.stack([(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det], axis=-1)
+    return np.where(ok[..., None], step, np.nan)
 
 
 def refine_centre(gray: np.ndarray, centre: np.ndarray, radius: float,
@@ -434,18 +552,38 @@ def refine_centre_and_symmetry(gray: np.ndarray, centre: np.ndarray, radius: flo
                                iterations: int = 6) -> tuple[np.ndarray, tuple[float, float] | None]:
     """:func:`refine_centre`, and the :func:`symmetry_errors` at the centre it returns
     where it measured them on the way (None where it did not)."""
-    c = refine_gradient(gray, centre, radius, iterations)
-    if not np.all(np.isfinite(c)):
-        return c, None
-    near = np.hypot(*(c - centre)) <= 0.3 * radius
-    start = c if near else np.asarray(centre, dtype=float)
-    p = refine_symmetric(gray, start, radius)
-    if not np.all(np.isfinite(p)) or np.hypot(*(p - start)) > 0.25 * radius:
-        return c, None
-    if near:
-        at_p, at_c = symmetry_errors(gray, p, radius), symmetry_errors(gray, c, radius)
-        return (c, at_c) if at_p[0] >= at_c[0] else (p, at_p)
-    return p, None
+    c, errors = refine_centres_and_symmetry([gray], centre, radius, iterations)
+    return c[0], None if np.isnan(errors[0, 0]) else (float(errors[0, 0]), float(errors[0, 1]))
+
+
+def refine_centres_and_symmetry(grays, centres: np.ndarray, radii: np.ndarray,
+                                iterations: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`refine_centre_and_symmetry` of K targets together, each in its own image
+    ``grays[k]`` (centres (K, 2) px, radii (K,) px): centres (K, 2) px (NaN rows where
+    the gradients are degenerate) and the symmetry errors (K, 2) at them, NaN where not
+    measured on the way."""
+    centres, radii = _as_targets(centres, radii)
+    c = refine_gradients(grays, centres, radii, iterations)
+    errors = np.full((len(c), 2), np.nan)
+    idx = np.flatnonzero(np.isfinite(c).all(axis=1))
+    if not idx.size:
+        return c, errors
+    near = np.hypot(*(c[idx] - centres[idx]).T) <= 0.3 * radii[idx]
+    start = np.where(near[:, None], c[idx], centres[idx])
+    p = refine_symmetric_each([grays[k] for k in idx], start, radii[idx])
+    kept = np.isfinite(p).all(axis=1) & (np.hypot(*(p - start).T) <= 0.25 * radii[idx])
+    # near: the more point-symmetric of the two; else the symmetric one wherever kept
+    both = np.flatnonzero(kept & near)
+    if both.size:
+        at = symmetry_errors_each([grays[idx[j]] for j in both] * 2, np.concatenate([p[both], c[idx[both]]]),
+                                  np.tile(radii[idx[both]], 2))
+        at_p, at_c = at[:len(both)], at[len(both):]
+        p_wins = ~(at_p[:, 0] >= at_c[:, 0])
+        c[idx[both]] = np.where(p_wins[:, None], p[both], c[idx[both]])
+        errors[idx[both]] = np.where(p_wins[:, None], at_p, at_c)
+    alone = np.flatnonzero(kept & ~near)
+    c[idx[alone]] = p[alone]
+    return c, errors
 
 
 def gradient_smoothing(radius: float) -> float:
@@ -454,7 +592,7 @@ def gradient_smoothing(radius: float) -> float:
     blurred noisy targets a little more (to 3 px: 0.012 / 0.072 px RMS instead of
     0.017 / 0.082) but spreads an occluder's edge into the window: a partly covered
     target then passes the symmetry check with its centre 0.5 px off (0.06 px here)."""
-    return float(np.clip(0.3 * radius, 0.7, 1.5))
+    return min(max(0.3 * float(radius), 0.7), 1.5)
 
 
 def refine_gradient(gray: np.ndarray, centre: np.ndarray, radius: float,
@@ -484,46 +622,93 @@ def refine_gradient(gray: np.ndarray, centre: np.ndarray, radius: float,
     (2,) float64
         Refined ``[u, v]``, or NaNs if the window leaves the image or is degenerate.
     """
-    if smooth_sigma is None:
-        smooth_sigma = gradient_smoothing(radius)
-    c = np.asarray(centre, dtype=float).copy()
+    return refine_gradients([gray], centre, radius, iterations, smooth_sigma)[0]
+
+
+def _gradient_patch(gray: np.ndarray, centre: np.ndarray, radius: float, smooth_sigma: float):
+    """The smoothed patch :func:`refine_gradient` differentiates for one target: (patch
+    (2 r + 3, 2 r + 3) float32 around pixel (iu, iv), iu, iv, r) with ``r`` its half-width
+    less one, px; None where it leaves the image."""
     h = int(np.ceil(0.75 * radius)) + 2
     m = max(3, int(np.ceil(0.35 * radius)))  # room for the window to move
     H, W = gray.shape
-    iu, iv = int(round(c[0])), int(round(c[1]))
+    iu, iv = round(float(centre[0])), round(float(centre[1]))
     r = h + m
     if iu - r - 1 < 0 or iv - r - 1 < 0 or iu + r + 2 > W or iv + r + 2 > H:
-        return np.full(2, np.nan)
+        return None
     patch = gray[iv - r - 1: iv + r + 2, iu - r - 1: iu + r + 2]
     if smooth_sigma > 0:
         patch = cv2.GaussianBlur(patch, (0, 0), smooth_sigma)
-    gu = ((patch[1:-1, 2:] - patch[1:-1, :-2]) * 0.5).astype(float)
-    gv = ((patch[2:, 1:-1] - patch[:-2, 1:-1]) * 0.5).astype(float)
-    qu1 = np.arange(-r, r + 1, dtype=float) + iu
-    qv1 = np.arange(-r, r + 1, dtype=float) + iv
-    qu = qu1[None, :]
-    qv = qv1[:, None]
+    return patch, iu, iv, r
+
+
+def _normal_terms(patches: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The five terms ``g_u g_u, g_u g_v, g_v g_v, (g g^T q)_u, (g g^T q)_v`` of
+    :func:`refine_gradient`'s normal equations at each pixel ``q`` of K windows
+    (:func:`_gradient_patch` s), centred in one square of the largest, side s: (K, 5,
+    s * s), zero outside each window's own square; and the square's columns ``q_u`` and
+    rows ``q_v``, (K, s) px each."""
+    big = max(p[3] for p in patches)
+    stack = np.zeros((len(patches), 2 * big + 3, 2 * big + 3), np.float32)
+    inside = np.zeros((len(patches), 2 * big + 1, 2 * big + 1))
+    for j, (patch, _, _, r) in enumerate(patches):
+        a = big - r
+        stack[j, a: a + 2 * r + 3, a: a + 2 * r + 3] = patch
+        inside[j, a: a + 2 * r + 1, a: a + 2 * r + 1] = 1.0
+    gu = ((stack[:, 1:-1, 2:] - stack[:, 1:-1, :-2]) * 0.5).astype(float) * inside
+    gv = ((stack[:, 2:, 1:-1] - stack[:, :-2, 1:-1]) * 0.5).astype(float) * inside
+    s = np.arange(-big, big + 1, dtype=float)
+    qu = s[None, None, :] + np.array([p[1] for p in patches], dtype=float)[:, None, None]
+    qv = s[None, :, None] + np.array([p[2] for p in patches], dtype=float)[:, None, None]
     guu, guv, gvv = gu * gu, gu * gv, gv * gv
-    # the five sums of the normal equations as one product with the weights
-    terms = np.stack([guu, guv, gvv, guu * qu + guv * qv, guv * qu + gvv * qv]).reshape(5, -1)
-    qu, qv = np.broadcast_to(qu, guu.shape).ravel(), np.broadcast_to(qv, guu.shape).ravel()
-    sw2 = 2 * (0.35 * radius) ** 2
-    cut2 = (0.75 * radius) ** 2
+    terms = np.stack([guu, guv, gvv, guu * qu + guv * qv, guv * qu + gvv * qv], axis=1)
+    return terms.reshape(len(patches), 5, -1), qu[:, 0, :], qv[:, :, 0]
+
+
+def refine_gradients(grays, centres: np.ndarray, radii: np.ndarray, iterations: int = 6,
+                     smooth_sigma: float | None = None) -> np.ndarray:
+    """:func:`refine_gradient` of K targets together, each in its own image ``grays[k]``
+    (centres (K, 2) px, radii (K,) px): (K, 2) px, NaN rows where the window leaves the
+    image or is degenerate. The iterations of all targets are taken together; each stops
+    on its own."""
+    centres, radii = _as_targets(centres, radii)
+    out = np.full((len(centres), 2), np.nan)
+    patches = [_gradient_patch(g, c, r, gradient_smoothing(r) if smooth_sigma is None else smooth_sigma)
+               for g, c, r in zip(grays, centres, radii)]
+    idx = np.array([k for k, p in enumerate(patches) if p is not None], dtype=int)
+    if not idx.size:
+        return out
+    terms, qu, qv = _normal_terms([patches[k] for k in idx])
+    middle = np.array([patches[k][1:3] for k in idx], dtype=float)
+    rad = radii[idx]
+    room = np.maximum(3, np.ceil(0.35 * rad))  # how far the window may move, px
+    sw2 = 2 * (0.35 * rad) ** 2
+    cut2 = (0.75 * rad) ** 2
+    c = centres[idx].copy()
+    going = np.arange(len(idx))
     for _ in range(iterations):
-        if abs(c[0] - iu) > m or abs(c[1] - iv) > m:
-            return np.full(2, np.nan)
-        d2 = (qu - c[0]) ** 2 + (qv - c[1]) ** 2
-        w = np.where(d2 <= cut2, np.exp(-d2 / sw2), 0.0)
-        a00, a01, a11, b0, b1 = terms @ w
-        det = a00 * a11 - a01 * a01
-        if not np.isfinite(det) or det <= 1e-12 * max((a00 + a11) ** 2, 1e-30):
-            return np.full(2, np.nan)
-        new = np.array([(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det])
-        step = np.hypot(*(new - c))
-        c = new
-        if step < 2e-3:
+        away = (np.abs(c[going] - middle[going]) > room[going, None]).any(axis=1)
+        c[going[away]] = np.nan
+        going = going[~away]
+        if not going.size:
             break
-    return c
+        d2 = (((qv[going] - c[going, 1, None]) ** 2)[:, :, None]
+              + ((qu[going] - c[going, 0, None]) ** 2)[:, None, :]).reshape(len(going), -1)
+        w = np.zeros_like(d2)
+        np.exp(-d2 / sw2[going, None], out=w, where=d2 <= cut2[going, None])
+        a00, a01, a11, b0, b1 = (terms[going] @ w[:, :, None])[:, :, 0].T
+        det = a00 * a11 - a01 * a01
+        flat = ~np.isfinite(det) | (det <= 1e-12 * np.maximum((a00 + a11) ** 2, 1e-30))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            new = np.stack([(a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det], axis=1)
+        new[flat] = np.nan
+        step = np.hypot(*(new - c[going]).T)
+        c[going] = new
+        going = going[~flat & ~(step < 2e-3)]
+        if not going.size:
+            break
+    out[idx] = c
+    return out
 
 
 def refine_saddle(gray: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
