@@ -226,7 +226,8 @@ def candidate_fit(values, std, crush_max=0.6, engine_force_max=0.0, priors=None,
     m = measurement()
     acts = np.arange(50) >= 20  # the blocked wheels' and the lifted rear's window
     traj = types.SimpleNamespace(t=np.linspace(0.0, 0.2, 50), crush=np.linspace(0.0, crush_max, 50),
-                                 engine_force=np.full(50, engine_force_max), front_blocked=acts * 1.0,
+                                 engine_force=np.full(50, engine_force_max), engine_x=np.linspace(0.0, 0.4, 50),
+                                 mounts_broken=acts * 1.0, front_blocked=acts * 1.0,
                                  rear_margin=np.where(acts, -1.0, 1.0), rear_lift=np.where(acts, 0.05, 0.0))
     params = types.SimpleNamespace(k_compression=k_compression)
     return FakeFit(m, {}, tuple(values), dict(values), dict(std), dict(priors or {}), {}, traj, params)
@@ -245,9 +246,11 @@ PLAUSIBLE = {
     "rate_dependence": ({"rate_dependence.rate_coefficient": 0.03}, {"rate_dependence.rate_coefficient": 0.004}),
     "rear_axle_lift": ({"rear_axle_lift.rear_axle_stiffness": 225e3}, {"rear_axle_lift.rear_axle_stiffness": 10e3}),
     "engine_impact": ({"engine_impact.engine_mass": 200.0, "engine_impact.gap": 0.35, "engine_impact.k_engine": 5e6,
-                       "engine_impact.k_rear": 1e6, "engine_impact.stop_forward": 0.05},
+                       "engine_impact.k_rear": 1e6, "engine_impact.stop_forward": 0.05,
+                       "engine_impact.mount_break_force": 5e4},
                       {"engine_impact.engine_mass": 20.0, "engine_impact.gap": 0.02, "engine_impact.k_engine": 1e6,
-                       "engine_impact.k_rear": 2e5, "engine_impact.stop_forward": 0.01}),
+                       "engine_impact.k_rear": 2e5, "engine_impact.stop_forward": 0.01,
+                       "engine_impact.mount_break_force": 5e3}),
 }
 
 
@@ -772,6 +775,8 @@ def test_only_models_the_recording_does_not_rule_out_are_alternatives(monkeypatc
             for e, k in (("stiffness_zone", 2.0e6), ("rate_dependence", 1.0e6), ("engine_impact", 1.2e6),
                          ("front_wheel_block", 1.4e6))}
     fits["engine_impact"].at_bound = {"engine_impact.gap": "at its upper bound"}
+    fits["engine_impact"].trajectory = types.SimpleNamespace(  # it hit the barrier, its mounts let go
+        engine_force=np.array([0.0, 1e5]), engine_x=np.array([0.0, 0.4]), mounts_broken=np.array([0.0, 1.0]))
     fits["stiffness_zone"].at_bound = {"contact_time": "at its upper bound"}  # the current model's bound too
     monkeypatch.setitem(loop.BY_EFFECT, "front_wheel_block", dataclasses.replace(
         BY_EFFECT["front_wheel_block"], evidence=lambda fr, vehicle, window: ("the wheels turn there", "")))

@@ -185,7 +185,7 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     template = make_params(k_compression=730e3, k_restitution=730e3, restitution=0.2, dz_contact=0.0)
     measured = measured_effects(measurement)
     kwargs = dict(template=superset_template(template, vehicle), free=superset_spec(names), speed_mps=speed_mps,
-                  held=held_for(measured, vehicle), priors=priors_for(measured, vehicle))
+                  held=held_for(measured, vehicle, measured), priors=priors_for(measured, vehicle))
     # every starting guess of the measured body (an engine's: at its typical gap, and out of
     # the barrier's reach): a fit from one stays in its valley (on reference worlds whose
     # engine never hits, the fit from the typical gap made it hit: x RMS 13 mm against 4.7)
@@ -411,7 +411,8 @@ def phases_spanned(window, phases) -> str:
 
 def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     """'' when the fitted candidate is a finding, else why not. Every candidate: no prior
-    pulled beyond 3 sigma, no parameter at a bound or undetermined, a depth the crush reaches
+    pulled beyond 3 sigma, no parameter at a bound or undetermined (except one the recorded
+    crash cannot show, ``Candidate.unseen``, reported not identified), a depth the crush reaches
     and the data fix, or that a measured channel shows acting (an engine's gap: the data fix
     it); then its own evidence check over the window
     where it acts and its own rules (``Candidate.evidence``, ``Candidate.implausible``); and
@@ -423,7 +424,10 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     if why:
         return why
     against, window, seen = _evidence_against(effect, fr, vehicle)
+    unseen = BY_EFFECT[effect].unseen(fr)  # not identified, and said so: neither its bound nor its std decides
     for p in BY_EFFECT[effect].parameters:
+        if p.name in unseen:
+            continue
         value, sd = fr.values[p.name], fr.std[p.name]
         if fr.at_bound.get(p.name):
             return f"{p.name} ended {fr.at_bound[p.name]}: the fit's range, not the recording, set it"
@@ -508,7 +512,7 @@ def discover(
     def run(active, initial, meas=measurement, opts=fopts):
         label = "+".join(("base", *active))
         return fit(meas, vehicle, template=template, free=spec, initial=initial, options=opts,
-                   speed_mps=speed_mps, model=label, held=held_for(active, vehicle), require_convergence=False,
+                   speed_mps=speed_mps, model=label, held=held_for(active, vehicle, measured), require_convergence=False,
                    priors=priors_for(active, vehicle))
 
     def run_to_convergence(active, initial, opts=fopts):
@@ -760,9 +764,10 @@ def _refuted(effect: str, fr: FitResult, vehicle) -> bool:
     """Whether the fitted candidate is ruled out: what was known before the fit (a prior
     beyond 3 sigma), one of its own parameters at a bound of its range (the range, not the
     recording, set it; on a development world a rear axle stiffness 1000 times its scale put
-    the impact speed 0.49 m/s off), or its own evidence check over the window where it acts.
-    A base parameter at its bound is the current model's too, and rules out nothing."""
-    return (any(n in fr.at_bound for n in BY_EFFECT[effect].names) or bool(_prior_conflicts(fr))
+    the impact speed 0.49 m/s off; not one the recorded crash cannot show, ``Candidate.unseen``),
+    or its own evidence check over the window where it acts. A base parameter at its bound is the current model's too, and rules out nothing."""
+    at_bound = [n for n in BY_EFFECT[effect].names if n in fr.at_bound]
+    return (bool(set(at_bound) - set(BY_EFFECT[effect].unseen(fr) if at_bound else ())) or bool(_prior_conflicts(fr))
             or bool(_evidence_against(effect, fr, vehicle)[0]))
 
 

@@ -121,10 +121,12 @@ def neutral_values(vehicle) -> dict[str, float]:
     return {name: _neutral(c, name.split(".", 1)[1], vehicle) for c in CANDIDATES for name in c.names}
 
 
-def held_for(active, vehicle) -> dict[str, float]:
-    """The held values when the candidates named in ``active`` are fitted: all others neutral."""
+def held_for(active, vehicle, measured=()) -> dict[str, float]:
+    """The held values when the candidates named in ``active`` are fitted: all others neutral,
+    and of those the recording measures (``measured``), their ``fixed_when_measured`` fields."""
     active = set(active)
-    return {k: v for k, v in neutral_values(vehicle).items() if k.split(".", 1)[0] not in active}
+    fixed = {f"{e}.{f}" for e in measured for f in BY_EFFECT[e].fixed_when_measured}
+    return {k: v for k, v in neutral_values(vehicle).items() if k.split(".", 1)[0] not in active or k in fixed}
 
 
 def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None, measured=False) -> list[dict[str, float]]:
@@ -134,8 +136,9 @@ def starting_guesses(candidate: Candidate, fr, vehicle, analysis=None, measured=
     vehicle and the current residual analysis; a guess that repeats an earlier one (a rule
     that falls back on the typical value) is tried once."""
     starts = (*candidate.starts, *candidate.measured_starts) if measured else candidate.starts
+    fixed = set(candidate.fixed_when_measured) if measured else set()
     guesses = [{f"{candidate.effect}.{field}": float(value(fr, vehicle, analysis) if callable(value) else value)
-                for field, value in start.items()} for start in starts]
+                for field, value in start.items() if field not in fixed} for start in starts]
     return [g for i, g in enumerate(guesses) if g not in guesses[:i]]
 
 

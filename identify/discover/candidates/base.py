@@ -123,6 +123,9 @@ class Candidate:
         gap but that it is larger), reported not identified with the reason.
     measured_starts : further starting guesses (as ``starts``) when the recording measures
         this body itself and it is fitted as part of the base model.
+    fixed_when_measured : fields held at their ``neutral`` value, not fitted, when the
+        recording measures this body itself (an engine's mounts' break force: freed there, the
+        fit of NHTSA 10146's engine let the mounts go at 240 N and put the engine at 40 kg).
     in_base : '' for a candidate whose neutral state is its absence; else its neutral state is
         part of the base model (the engine on its mounts, out of the barrier's reach: every
         car has one), every fitted model keeps it, and this is the sentence that says so in
@@ -143,6 +146,7 @@ class Candidate:
     implausible: Callable = _no_rule
     unseen: Callable = _nothing_unseen
     measured_starts: tuple[dict[str, float | Callable], ...] = ()
+    fixed_when_measured: tuple[str, ...] = ()
     in_base: str = ""
 
     @property

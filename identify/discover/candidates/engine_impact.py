@@ -12,7 +12,19 @@ as priors; it is no finding when the engine never reaches the barrier in the rec
 and a measured engine that never reaches it leaves its gap and block stiffness not identified.
 A fit starts at the typical gap and where the current fit's engine just reaches the barrier;
 a measured engine's also out of the barrier's reach (a candidate that never reaches it is no
-finding, so discovery does not try that start).
+finding, so discovery does not try that start). Discovery tries each gap twice: with the
+mounts letting go at the typical force, and with mounts that hold (:data:`MOUNTS_HOLD_N`).
+Whether the mounts let go is a switch the recording's motion cannot be walked across: the
+break is latched, and near its force a fit's misfit jumps back and forth with the engine's
+parameters (on development world 960016, an engine that hit the barrier and whose mounts
+held, gaps 0, 1 and 3 mm longer gave x chi-squares of 486, 10,188 and 970, the mounts'
+latched break at 9, 6 and 2 %), so a fit started on the wrong side of it stops in a poor minimum.
+On that world's true motion (no film; x and pitch, 0.3 mm of noise), fitted from gaps of 0.6,
+0.7 and 0.8 of the crush: with the typical break, x RMS 1.0-21 mm against the base model's
+1.7; with mounts that hold, 0.35 mm from each start and k_compression within 1 % (the base
+model's +22 %). On 960007, whose mounts let go at 36 ms, the other way round: 0.38 and 0.48 mm
+from two of the three starts with the typical break, 6.0-6.4 mm with mounts that hold.
+An engine the recording measures keeps the base model's break (``fixed_when_measured``).
 """
 
 from __future__ import annotations
@@ -27,6 +39,10 @@ ENGINE_GAP_M = 0.35  # m, when the vehicle file gives no engine_gap
 ENGINE_MASS_REL_SIGMA = 0.3
 ENGINE_GAP_SIGMA_M = 0.1
 GAP_OUT_OF_REACH_M = 1.15  # m, a measured engine's second start: beyond any crash test's crush (near the range's top)
+# N, mounts that hold: 100 times the scale of the break force's fit, beyond any force the mounts
+# carry (about 0.1 MN when the engine is stopped by the barrier), where the latched break's
+# logistic is below 1e-20 and a fit started there stays there
+MOUNTS_HOLD_N = 5.0e6
 
 
 def typical_engine_mass(vehicle) -> float:
@@ -65,21 +81,33 @@ def reaches_the_barrier(fr) -> bool:
     return float(np.max(np.asarray(fr.trajectory.engine_force))) > 0.0
 
 
-def unseen_without_a_hit(fr) -> dict[str, str]:
-    """The engine's barrier parameters when it never touched the barrier in the fitted crash:
-    the gap is then only known to exceed how far the engine came (its largest travel, m),
-    and the block's stiffness is not seen at all."""
+def mounts_let_go(fr) -> bool:
+    """Whether the fitted engine's mounts let go (half broken or more) in the recorded crash."""
+    return float(np.max(np.asarray(fr.trajectory.mounts_broken))) >= 0.5
+
+
+def unseen(fr) -> dict[str, str]:
+    """The engine's parameters the fitted crash cannot show: its barrier parameters when it
+    never touched the barrier (the gap is then only known to exceed how far the engine came,
+    its largest travel, m; the block's stiffness is not seen at all), and the mounts' break
+    force when they never let go (only known to exceed what they carried)."""
+    out = {}
+    if not mounts_let_go(fr):
+        out["engine_impact.mount_break_force"] = (
+            "not identified: the mounts never let go in the recorded crash; their strength is only known to exceed"
+            " the force they carried")
     if reaches_the_barrier(fr):
-        return {}
+        return out
     reached = float(np.max(np.asarray(fr.trajectory.engine_x)))
     why = "not identified: the engine never reached the barrier in the recorded crash"
-    return {"engine_impact.gap": f"{why}; its gap is only known to exceed the {reached:.3f} m it travelled",
+    return {**out, "engine_impact.gap": f"{why}; its gap is only known to exceed the {reached:.3f} m it travelled",
             "engine_impact.k_engine": why}
 
 
 TYPICAL_START = {"engine_mass": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.engine_mass"],
                  "gap": lambda fr, vehicle, analysis: engine_typical(vehicle)["engine_impact.gap"],
-                 "k_engine": 3e6, "k_rear": 1e6, "stop_forward": 0.05}
+                 "k_engine": 3e6, "k_rear": 1e6, "stop_forward": 0.05,
+                 "mount_break_force": lambda fr, vehicle, analysis: float(on_its_mounts(vehicle).mount_break_force)}
 
 
 def just_reaching(fr, vehicle, analysis=None) -> float:
@@ -106,16 +134,19 @@ CANDIDATE = Candidate(
      parameter("engine_impact", "gap", "m", "logit", lower=0.05, upper=1.2),
      parameter("engine_impact", "k_engine", "N/m", "log", scale=1e6),
      parameter("engine_impact", "k_rear", "N/m", "log", scale=1e6),
-     parameter("engine_impact", "stop_forward", "m", "logit", lower=0.01, upper=0.6)),
+     parameter("engine_impact", "stop_forward", "m", "logit", lower=0.01, upper=0.6),
+     parameter("engine_impact", "mount_break_force", "N", "log", scale=5e4)),
     # the base model's engine: EngineImpact.defaults' typical mounts and block, never reaching the barrier
     {field: (lambda vehicle, field=field: float(getattr(on_its_mounts(vehicle), field))) for field in EngineImpact.units},
-    (TYPICAL_START, {**TYPICAL_START, "gap": just_reaching}),
+    tuple({**TYPICAL_START, **gap, **mounts} for mounts in ({}, {"mount_break_force": MOUNTS_HOLD_N})
+          for gap in ({}, {"gap": just_reaching})),
     {"engine_mass": "engine_mass_kg", "gap": "gap_m", "k_engine": "k_engine_N_per_m",
-     "k_rear": "k_rear_N_per_m", "stop_forward": "stop_forward_m"},
+     "k_rear": "k_rear_N_per_m", "stop_forward": "stop_forward_m", "mount_break_force": "mount_break_force_N"},
     priors=engine_priors,
     implausible=never_reaches_the_barrier,
-    unseen=unseen_without_a_hit,
+    unseen=unseen,
     measured_starts=({**TYPICAL_START, "gap": GAP_OUT_OF_REACH_M},),
+    fixed_when_measured=("mount_break_force",),
     in_base=("Every car has an engine on mounts, which lags the cabin when the crash begins: the base model"
              " holds one (the vehicle file's engine mass, else 13 % of the car's, on typical mounts),"
              " assumed, not fitted, that never reaches the barrier (discovery's engine_impact is one that does)."),
