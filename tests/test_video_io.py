@@ -241,3 +241,15 @@ def test_folder_without_frames_and_with_mixed_sizes(tmp_path):
     with pytest.raises(VideoError) as e:
         open_film(broken)
     one_line_error(e, "frame_1.png")
+
+
+def test_the_noise_of_a_byte_frame_is_that_of_the_same_values_in_16_bits():
+    """``frame_noise_sigma`` takes a byte frame's second differences in 16 bits: exact to
+    the extremes (0 beside 255 in every row: +-510), as the same values in uint16 give."""
+    from video.io import frame_noise_sigma
+
+    rng = np.random.default_rng(4)
+    extreme = np.tile(np.array([0, 255, 0, 255, 255, 0], np.uint8), (40, 20))
+    for frame in (extreme, rng.integers(0, 256, (48, 90)).astype(np.uint8),
+                  np.clip(rng.normal(128, 3, (48, 90)), 0, 255).astype(np.uint8)):
+        assert frame_noise_sigma(frame) == frame_noise_sigma(frame.astype(np.uint16)) > 0

@@ -526,3 +526,52 @@ def test_targets_followed_together_are_found_as_each_alone():
                              config)
         np.testing.assert_allclose(np.concatenate([c[k], [con[k], a[k]]]),
                                    np.concatenate([one[0][0], one[1], one[2]]), rtol=0, atol=1e-9)
+
+
+def _examine_alone(img, start, config, radius, contrast):
+    """One candidate examined on its own, as the detector did before it examined them
+    together: the single-target steps in turn; (centre, radius, contrast, symmetry) or
+    None."""
+    if not np.isfinite(radius) or contrast < config.min_contrast:
+        return None
+    c = refine_gradient(img, start, radius, config.refine_iterations)
+    if not np.all(np.isfinite(c)) or np.hypot(*(c - start)) > 0.5 * radius:
+        return None
+    radius, contrast = target_radius(img, c, config)
+    if not np.isfinite(radius) or not (config.min_radius_px <= radius <= config.max_radius_px) \
+            or contrast < config.min_contrast:
+        return None
+    c = refine_centre(img, c, radius, config.refine_iterations)
+    if not np.all(np.isfinite(c)):
+        return None
+    sym = max(symmetry_errors(img, c, radius))
+    return None if sym > config.max_symmetry_error else (c, radius, contrast, sym)
+
+
+def test_candidates_examined_together_get_what_each_gets_alone():
+    """The detector examines a frame's candidates together (``_examine``: each step taken
+    by those still alive); each gets what it gets examined alone: targets of 5-20 px
+    (several starts on some; those below row 100 smeared over 9 px, one of which passes
+    with its symmetry measured after the centre, not on the way), texture, points at the
+    border, a radius over the config's largest."""
+    from video.targets import _examine
+
+    centres, radii, angles, rng = _grid_scene(12)
+    img = draw_targets((250, 320), centres, radii, angles)
+    img[100:] = cv2.filter2D(img, -1, np.full((1, 9), 1.0 / 9, np.float32))[100:]
+    img = np.clip(img + rng.normal(0.0, 0.03, img.shape), 0, 1).astype(np.float32)
+    starts = np.concatenate([centres + rng.uniform(-1.0, 1.0, centres.shape),
+                             centres[:4] + rng.uniform(-2.0, 2.0, (4, 2)),
+                             rng.uniform([0, 0], [320, 250], (30, 2)), [[2.0, 2.0], [318.0, 120.0]]])
+    config = TargetConfig(max_radius_px=15.0)
+    first = np.array([target_radius(img, s, config) for s in starts])
+    got = _examine(img, starts, first[:, 0], first[:, 1], config)
+    alone = [_examine_alone(img, s, config, *f) for s, f in zip(starts, first)]
+    assert np.array_equal(np.isfinite(got[0][:, 0]), [a is not None for a in alone])
+    for k, a in enumerate(alone):
+        if a is not None:
+            np.testing.assert_allclose(got[0][k], a[0], rtol=0, atol=1e-9)
+            np.testing.assert_allclose([got[1][k], got[2][k], got[3][k]], a[1:], rtol=1e-12, atol=1e-12)
+    kept = sum(a is not None for a in alone)
+    assert kept >= 8 and len(alone) - kept >= 30  # both kinds were there
+    assert any(a is None and f[0] > config.max_radius_px for a, f in zip(alone, first))

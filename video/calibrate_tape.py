@@ -9,6 +9,7 @@ of edge position against edge number.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import cv2
@@ -119,12 +120,9 @@ def _chains(cent: np.ndarray, area: np.ndarray, cfg: TapeSearch) -> list[np.ndar
     if m < cfg.min_segments_per_shade:
         return []
     tree = cKDTree(cent)
-    radius = 6.0 * np.sqrt(area)
-    near = tree.query_ball_point(cent, radius)
-    ii = np.repeat(np.arange(m), [len(x) for x in near])
+    ii, jj = _flatten(tree.query_ball_point(cent, 6.0 * np.sqrt(area)))
     if ii.size == 0:
         return []
-    jj = np.concatenate([np.asarray(x, dtype=int) for x in near])
     ratio = area[jj] / area[ii]
     keep = (jj > ii) & (ratio > 0.6) & (ratio < 1.67)
     if not keep.any():
@@ -136,51 +134,63 @@ def _chains(cent: np.ndarray, area: np.ndarray, cfg: TapeSearch) -> list[np.ndar
     good = (d < cfg.spacing_tolerance * step) & (step > 0)
     # a pair with a similar blob between them skips it: not neighbours
     cand = np.flatnonzero(good)
-    between = tree.query_ball_point(0.5 * (ci[cand] + cj[cand]), 0.4 * step[cand])
-    for n, lst in zip(cand, between):
-        i, j = pairs[n]
-        for q in lst:
-            if q != i and q != j and 0.6 < area[q] / area[j] < 1.67:
-                good[n] = False
-                break
+    owner, q = _flatten(tree.query_ball_point(0.5 * (ci[cand] + cj[cand]), 0.4 * step[cand]))
+    n = cand[owner]
+    i, j = pairs[n, 0], pairs[n, 1]
+    good[n[(q != i) & (q != j) & (0.6 < area[q] / area[j]) & (area[q] / area[j] < 1.67)]] = False
     good &= (area[k] / area[pairs[:, 1]] > 0.6) & (area[k] / area[pairs[:, 1]] < 1.67)
     used = np.zeros(m, bool)
     chains = []
     order = np.argsort(-area[pairs[:, 0]])
-    for p in order:
-        if not good[p]:
-            continue
+    for p in order[good[order]]:
         i, j = pairs[p]
         if used[i] or used[j] or used[k[p]]:
             continue
-        chain = [i, j, int(k[p])]
-        steps = {i: 0, j: 1, int(k[p]): 2}
-        for direction in (1, -1):
-            while True:
-                a, b = (chain[-2], chain[-1]) if direction == 1 else (chain[1], chain[0])
-                st = cent[b] - cent[a]
-                if abs(steps[a] - steps[b]) == 2:  # the last step bridged a gap
-                    st = st / 2
-                kk = -1
-                for jump in (1, 2):  # one missing blob (clutter touching the tape) is bridged
-                    dd, kk = tree.query(cent[b] + jump * st)
-                    if (dd <= cfg.spacing_tolerance * np.linalg.norm(st) * jump
-                            and kk not in chain and not used[kk]
-                            and 0.6 < area[kk] / area[b] < 1.67):
-                        steps[kk] = steps[b] + direction * jump
-                        break
-                    kk = -1
-                if kk < 0:
-                    break
-                if direction == 1:
-                    chain.append(int(kk))
-                else:
-                    chain.insert(0, int(kk))
+        chain = _grow(tree, cent, area, used, [i, j, int(k[p])], cfg)
         if len(chain) >= cfg.min_segments_per_shade:
             chain = np.array(chain)
             used[chain] = True
             chains.append(chain)
     return chains
+
+
+def _flatten(lists) -> tuple[np.ndarray, np.ndarray]:
+    """The members of n lists of indices (``cKDTree.query_ball_point``'s answer) one list
+    after another, and the list each came from: (owner, member) int arrays."""
+    lengths = np.fromiter(map(len, lists), dtype=int, count=len(lists))
+    members = np.fromiter(itertools.chain.from_iterable(lists), dtype=int, count=int(lengths.sum()))
+    return np.repeat(np.arange(len(lists)), lengths), members
+
+
+def _grow(tree: cKDTree, cent: np.ndarray, area: np.ndarray, used: np.ndarray, chain: list,
+          cfg: TapeSearch) -> list:
+    """A chain of three blob indices (equally spaced centroids ``cent``, px) grown at both
+    ends, one step at a time, by the unused blob of similar ``area`` (px^2) nearest to
+    where the next step lands (one missing blob, clutter touching the tape, bridged)."""
+    steps = {b: s for s, b in enumerate(chain)}
+    for direction in (1, -1):
+        while True:
+            a, b = (chain[-2], chain[-1]) if direction == 1 else (chain[1], chain[0])
+            st = cent[b] - cent[a]
+            if abs(steps[a] - steps[b]) == 2:  # the last step bridged a gap
+                st = st / 2
+            dd, kk = tree.query(cent[b] + np.outer((1, 2), st))
+            reach = cfg.spacing_tolerance * np.sqrt(st @ st)
+            nxt = -1
+            for jump in (1, 2):
+                c = int(kk[jump - 1])
+                if (dd[jump - 1] <= reach * jump and c not in chain and not used[c]
+                        and 0.6 < area[c] / area[b] < 1.67):
+                    steps[c] = steps[b] + direction * jump
+                    nxt = c
+                    break
+            if nxt < 0:
+                break
+            if direction == 1:
+                chain.append(nxt)
+            else:
+                chain.insert(0, nxt)
+    return chain
 
 
 def _fit_pitch(edge_s: np.ndarray, idx: np.ndarray) -> tuple[float, float, float, float]:

@@ -195,7 +195,8 @@ def frame_noise_sigma(gray: np.ndarray, row_step: int = 8) -> float:
     if rows.shape[1] < 3 or rows.size == 0:
         return 0.0
     if rows.dtype.kind in "ui":
-        r = rows.astype(np.int32)
+        # bytes: second differences within +-510, exact in int16 (half the memory traffic)
+        r = rows.astype(np.int16 if rows.dtype.itemsize == 1 else np.int32)
         a = np.abs(r[:, :-2] + r[:, 2:] - 2 * r[:, 1:-1]).ravel()
         med = _grouped_median(a)
     else:

@@ -211,11 +211,14 @@ def _ring_points(centres: np.ndarray, radii: np.ndarray, n_angles: int) -> tuple
     """Positions (u, v), px, of ``n_angles`` samples on each ring of ``radii`` (px) around
     ``centres`` (``[u, v]`` on the last axis): shape ``centres.shape[:-1] + radii.shape +
     (n_angles,)`` where ``radii`` is (R,), and (K, R, n_angles) where it is (K, R), one row
-    of rings per centre."""
+    of rings per centre. float32, what ``cv2.remap`` takes: summed in float64 and rounded
+    once, with no float64 copy of the (often millions of) positions."""
     cos, sin, _ = _ring_angles(n_angles)
     c = np.asarray(centres, dtype=float)
     r = np.asarray(radii, dtype=float)[..., None]
-    return c[..., 0, None, None] + r * cos, c[..., 1, None, None] + r * sin
+    shape = np.broadcast_shapes(c.shape[:-1] + (1, 1), r.shape[:-1] + cos.shape)
+    return tuple(np.add(c[..., i, None, None], r * trig, out=np.empty(shape, np.float32), casting="same_kind")
+                 for i, trig in ((0, cos), (1, sin)))
 
 
 def _harmonic(vals: np.ndarray) -> np.ndarray:
@@ -299,6 +302,8 @@ def target_radii(grays, centres: np.ndarray, config: TargetConfig = TargetConfig
         px (NaN where the pattern does not reach ``config.min_radius_px``), and [0, 1].
     """
     centres = np.asarray(centres, dtype=float).reshape(-1, 2)
+    if not len(centres):
+        return np.zeros(0), np.zeros(0)
     rough = [None] * len(centres) if expected is None else np.asarray(expected, dtype=float).reshape(-1)
     rows = [_search_radii(config, e) for e in rough]
     counts = np.array([len(r) for r in rows])
@@ -413,6 +418,8 @@ def symmetry_errors_each(grays, centres: np.ndarray, radii: np.ndarray,
     """:func:`symmetry_errors` of K targets together, each in its own image ``grays[k]``
     (centres (K, 2) px, radii (K,) px): (K, 2) point and quarter-turn errors."""
     centres, radii = _as_targets(centres, radii)
+    if not len(centres):
+        return np.zeros((0, 2))
     grids = [_symmetry_grid(h) for h in np.round(np.maximum(2.0, extent * radii), 2)]
     du, dv, mask = (np.stack(g) for g in zip(*grids))
     patch = _sample_each(grays, centres[:, 0, None, None] + du, centres[:, 1, None, None] + dv)
@@ -669,23 +676,45 @@ def refine_gradients(grays, centres: np.ndarray, radii: np.ndarray, iterations: 
                      smooth_sigma: float | None = None) -> np.ndarray:
     """:func:`refine_gradient` of K targets together, each in its own image ``grays[k]``
     (centres (K, 2) px, radii (K,) px): (K, 2) px, NaN rows where the window leaves the
-    image or is degenerate. The iterations of all targets are taken together; each stops
-    on its own."""
+    image or is degenerate. Windows of similar size (:func:`_size_groups`) are refined
+    together, the iterations of a group's targets taken together; each stops on its own."""
     centres, radii = _as_targets(centres, radii)
     out = np.full((len(centres), 2), np.nan)
     patches = [_gradient_patch(g, c, r, gradient_smoothing(r) if smooth_sigma is None else smooth_sigma)
                for g, c, r in zip(grays, centres, radii)]
     idx = np.array([k for k, p in enumerate(patches) if p is not None], dtype=int)
-    if not idx.size:
-        return out
-    terms, qu, qv = _normal_terms([patches[k] for k in idx])
-    middle = np.array([patches[k][1:3] for k in idx], dtype=float)
-    rad = radii[idx]
-    room = np.maximum(3, np.ceil(0.35 * rad))  # how far the window may move, px
-    sw2 = 2 * (0.35 * rad) ** 2
-    cut2 = (0.75 * rad) ** 2
-    c = centres[idx].copy()
-    going = np.arange(len(idx))
+    for group in _size_groups(np.array([patches[k][3] for k in idx], dtype=int)):
+        k = idx[group]
+        out[k] = _refine_group([patches[j] for j in k], centres[k], radii[k], iterations)
+    return out
+
+
+def _size_groups(half_widths: np.ndarray) -> list[np.ndarray]:
+    """Indices into the (K,) ``half_widths`` (px) of :func:`_gradient_patch` windows, in
+    groups of similar size, smallest first: a group's largest square is at most twice
+    the area of its smallest (:func:`_normal_terms` pads a group to its largest; the
+    candidates of one frame had radii from 7 to 50 px)."""
+    order = np.argsort(half_widths, kind="stable")
+    area = (2 * half_widths[order] + 3) ** 2
+    groups, start = [], 0
+    for j in range(1, len(order) + 1):
+        if j == len(order) or area[j] > 2 * area[start]:
+            groups.append(order[start:j])
+            start = j
+    return groups
+
+
+def _refine_group(patches: list, centres: np.ndarray, radii: np.ndarray, iterations: int) -> np.ndarray:
+    """:func:`refine_gradients` of n targets from their windows ``patches``
+    (:func:`_gradient_patch` s) and starts ``centres`` (n, 2) px, radii (n,) px: (n, 2)
+    px, NaN rows where degenerate or run off."""
+    terms, qu, qv = _normal_terms(patches)
+    middle = np.array([p[1:3] for p in patches], dtype=float)
+    room = np.maximum(3, np.ceil(0.35 * radii))  # how far the window may move, px
+    sw2 = 2 * (0.35 * radii) ** 2
+    cut2 = (0.75 * radii) ** 2
+    c = centres.copy()
+    going = np.arange(len(c))
     for _ in range(iterations):
         away = (np.abs(c[going] - middle[going]) > room[going, None]).any(axis=1)
         c[going[away]] = np.nan
@@ -707,8 +736,7 @@ def refine_gradients(grays, centres: np.ndarray, radii: np.ndarray, iterations: 
         going = going[~flat & ~(step < 2e-3)]
         if not going.size:
             break
-    out[idx] = c
-    return out
+    return c
 
 
 def refine_saddle(gray: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
@@ -775,28 +803,50 @@ def _local_maxima(resp: np.ndarray, threshold: float, min_distance: int) -> np.n
     return np.stack([us[order], vs[order]], axis=1)
 
 
-def _examine(gray: np.ndarray, start: np.ndarray, config: TargetConfig, first_look=None):
-    """Refine and check one candidate; return (centre, radius, contrast, sym) or None.
-    ``first_look``: :func:`target_radius` at ``start``, when measured already."""
-    radius, contrast = target_radius(gray, start, config) if first_look is None else first_look
-    if not np.isfinite(radius) or contrast < config.min_contrast:
-        return None
-    c = refine_gradient(gray, start, radius, config.refine_iterations)
-    if not np.all(np.isfinite(c)) or np.hypot(*(c - start)) > 0.5 * radius:
-        return None
-    radius, contrast = target_radius(gray, c, config)
-    if not np.isfinite(radius) or not (config.min_radius_px <= radius <= config.max_radius_px):
-        return None
-    if contrast < config.min_contrast:
-        return None
-    c = refine_centre(gray, c, radius, config.refine_iterations)
-    if not np.all(np.isfinite(c)):
-        return None
-    e1, e2 = symmetry_errors(gray, c, radius)
-    sym = max(e1, e2)
-    if sym > config.max_symmetry_error:
-        return None
-    return c, radius, contrast, sym
+def _examine(gray: np.ndarray, starts: np.ndarray, radius: np.ndarray, contrast: np.ndarray,
+             config: TargetConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Refine and check N candidates together: each step is taken by the candidates still
+    alive, those failing it dropped.
+
+    Parameters
+    ----------
+    gray : (H, W) float32
+    starts : (N, 2) float
+        Candidate positions ``[u, v]``, px.
+    radius, contrast : (N,) float
+        :func:`target_radius` at ``starts`` (the first look), px and [0, 1].
+    config : TargetConfig
+
+    Returns
+    -------
+    centres : (N, 2) float64
+        Refined centres, px; NaN rows for the candidates rejected.
+    radius, contrast, symmetry : (N,) float64
+        Each target's radius (px), contrast ([0, 1]) and larger symmetry error at its
+        centre (NaN where rejected).
+    """
+    n = len(starts)
+    centres = np.full((n, 2), np.nan)
+    out_r, out_con, sym = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    alive = np.flatnonzero(np.isfinite(radius) & (contrast >= config.min_contrast))
+    c = refine_gradients([gray] * alive.size, starts[alive], radius[alive], config.refine_iterations)
+    ok = np.isfinite(c).all(axis=1)
+    ok[ok] = np.hypot(*(c[ok] - starts[alive[ok]]).T) <= 0.5 * radius[alive[ok]]
+    alive, c = alive[ok], c[ok]
+    r, con = target_radii([gray] * alive.size, c, config)
+    ok = np.isfinite(r)
+    ok[ok] = (r[ok] >= config.min_radius_px) & (r[ok] <= config.max_radius_px) & (con[ok] >= config.min_contrast)
+    alive, c, r, con = alive[ok], c[ok], r[ok], con[ok]
+    c, errors = refine_centres_and_symmetry([gray] * alive.size, c, r, config.refine_iterations)
+    ok = np.isfinite(c).all(axis=1)
+    alive, c, r, con, errors = alive[ok], c[ok], r[ok], con[ok], errors[ok]
+    unmeasured = np.flatnonzero(np.isnan(errors[:, 0]))
+    errors[unmeasured] = symmetry_errors_each([gray] * unmeasured.size, c[unmeasured], r[unmeasured])
+    worst = errors.max(axis=1)
+    ok = ~(worst > config.max_symmetry_error)
+    alive = alive[ok]
+    centres[alive], out_r[alive], out_con[alive], sym[alive] = c[ok], r[ok], con[ok], worst[ok]
+    return centres, out_r, out_con, sym
 
 
 def detect_targets(frame: np.ndarray, config: TargetConfig = TargetConfig(),
@@ -834,30 +884,35 @@ def detect_targets(frame: np.ndarray, config: TargetConfig = TargetConfig(),
     starts = cand.astype(float) + np.array([u0, v0], dtype=float)
     # the first look at every candidate at once; most are the background's corners
     radius, contrast = _radii_of_many(gray, starts, config)
-    looked = np.isfinite(radius) & (contrast >= config.min_contrast)
-    found: list = []
-    for start, r, con in zip(starts[looked], radius[looked], contrast[looked]):
-        if any(np.hypot(*(start - f[0])) < max(2.0, 0.5 * f[1]) for f in found):
-            continue
-        res = _examine(gray, start, config, (r, con))
-        if res is None:
-            continue
-        if any(np.hypot(*(res[0] - f[0])) < max(2.0, 0.5 * f[1]) for f in found):
-            continue
-        found.append(res)
-    if not found:
+    centres, radius, contrast, sym = _examine(gray, starts, radius, contrast, config)
+    kept = _first_of_each(starts, centres, radius)
+    if not kept.size:
         return _empty()
-    centres = np.array([f[0] for f in found])
-    radii = np.array([f[1] for f in found])
-    order = np.lexsort((centres[:, 0], centres[:, 1]))
-    centres, radii = centres[order], radii[order]
+    order = kept[np.lexsort((centres[kept, 0], centres[kept, 1]))]
     return Detections(
-        centres=centres,
-        radii=radii,
-        orientations=np.array([orientation(gray, c, r) for c, r in zip(centres, radii)]),
-        contrasts=np.array([found[i][2] for i in order]),
-        symmetry=np.array([found[i][3] for i in order]),
+        centres=centres[order],
+        radii=radius[order],
+        orientations=orientations([gray] * order.size, centres[order], radius[order]),
+        contrasts=contrast[order],
+        symmetry=sym[order],
     )
+
+
+def _first_of_each(starts: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """Indices of the targets kept, strongest candidate first: a candidate whose start
+    (px) or refined centre (px) lies within ``max(2, radius / 2)`` of a target kept
+    before it is the same target; NaN ``centres`` rows are rejected candidates."""
+    kept: list[int] = []
+    for k in range(len(starts)):
+        if not np.isfinite(centres[k, 0]):
+            continue
+        if kept:
+            reach = np.maximum(2.0, 0.5 * radii[kept])
+            if (np.hypot(*(starts[k] - centres[kept]).T) < reach).any() or \
+                    (np.hypot(*(centres[k] - centres[kept]).T) < reach).any():
+                continue
+        kept.append(k)
+    return np.array(kept, dtype=int)
 
 
 class QuadrantTargetDetector(Detector):
