@@ -86,6 +86,22 @@ def test_mounts_that_held_do_not_refuse_an_engine_that_hit(a4):
     assert "mount_break_force ended at its upper bound" in _plausible("engine_impact", fr, a4)
 
 
+def test_mounts_that_held_do_not_rule_an_engine_out_of_the_alternatives(a4):
+    """The same rule where discovery decides which models the recording does not rule out
+    (``_refuted``): a break force at a bound rules the engine out only when the mounts let go."""
+    from identify.discover.loop import _refuted
+
+    names = ("engine_mass", "gap", "k_engine", "k_rear", "stop_forward", "mount_break_force")
+    values = {f"engine_impact.{n}": v for n, v in zip(names, (230.0, 0.4, 3e6, 1e6, 0.05, 5e6))}
+    fr = fake_fit(values, {k: 0.1 * v for k, v in values.items()}, {})
+    fr.measurement = SimpleNamespace(channels={}, derived=())  # no channel to check it against
+    fr.at_bound = {"engine_impact.mount_break_force": "at its upper bound"}
+    fr.trajectory.mounts_broken = np.zeros(2)
+    assert not _refuted("engine_impact", fr, a4)
+    fr.trajectory.mounts_broken = np.array([0.0, 1.0])
+    assert _refuted("engine_impact", fr, a4)
+
+
 def test_a_sensor_recording_without_engine_channels_says_what_it_cannot_tell():
     sensors = SimpleNamespace(sensor_test=object())
     without = fake_fit({}, {}, {})

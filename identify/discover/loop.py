@@ -424,10 +424,7 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
     if why:
         return why
     against, window, seen = _evidence_against(effect, fr, vehicle)
-    unseen = BY_EFFECT[effect].unseen(fr)  # not identified, and said so: neither its bound nor its std decides
-    for p in BY_EFFECT[effect].parameters:
-        if p.name in unseen:
-            continue
+    for p in _judged(effect, fr):
         value, sd = fr.values[p.name], fr.std[p.name]
         if fr.at_bound.get(p.name):
             return f"{p.name} ended {fr.at_bound[p.name]}: the fit's range, not the recording, set it"
@@ -455,6 +452,14 @@ def _plausible(effect: str, fr: FitResult, vehicle) -> str:
         why = (f"its fitted model never shows it within the recording (no {effect.replace('_', ' ')} there):"
                " whatever its parameters changed, it is not that mechanism")
     return why
+
+
+def _judged(effect: str, fr: FitResult) -> list:
+    """The candidate's parameters its fit ``fr`` is judged on (a bound, an undetermined std):
+    all but those the recorded crash cannot show (``Candidate.unseen``), which are reported
+    not identified instead."""
+    unseen = BY_EFFECT[effect].unseen(fr)
+    return [p for p in BY_EFFECT[effect].parameters if p.name not in unseen]
 
 
 def _prior_conflicts(fr: FitResult) -> str:
@@ -764,10 +769,10 @@ def _refuted(effect: str, fr: FitResult, vehicle) -> bool:
     """Whether the fitted candidate is ruled out: what was known before the fit (a prior
     beyond 3 sigma), one of its own parameters at a bound of its range (the range, not the
     recording, set it; on a development world a rear axle stiffness 1000 times its scale put
-    the impact speed 0.49 m/s off; not one the recorded crash cannot show, ``Candidate.unseen``),
-    or its own evidence check over the window where it acts. A base parameter at its bound is the current model's too, and rules out nothing."""
-    at_bound = [n for n in BY_EFFECT[effect].names if n in fr.at_bound]
-    return (bool(set(at_bound) - set(BY_EFFECT[effect].unseen(fr) if at_bound else ())) or bool(_prior_conflicts(fr))
+    the impact speed 0.49 m/s off; not one the recorded crash cannot show, :func:`_judged`),
+    or its own evidence check over the window where it acts. A base parameter at its bound is
+    the current model's too, and rules out nothing."""
+    return (any(p.name in fr.at_bound for p in _judged(effect, fr)) or bool(_prior_conflicts(fr))
             or bool(_evidence_against(effect, fr, vehicle)[0]))
 
 
