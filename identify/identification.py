@@ -151,7 +151,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         "speed_mps": fr.speed,
         "contact_time_ms": fr.contact_time * 1e3,
         "parameters": params,
-        "nuisance": {n: _nuisance_entry(fr, n) for n in ("impact_speed", "contact_time") if n in fr.values},
+        "nuisance": {n: _nuisance_entry(fr, n) for n in NUISANCE if n in fr.values},
         "covariance": {"names": list(fr.names), "matrix": fr.covariance},
         "correlation": {"names": list(fr.names), "matrix": fr.correlation},
         "fit": {

@@ -137,6 +137,26 @@ def test_tracks_csv_writes_lost_samples_as_nan_and_sigma_columns_after_values():
                 scale_m_per_px=0.004, scale_sigma=1e-6, impact_speed_mps=10.0, direction=1)
     rows = list(csv.reader(tracks_csv(tr).splitlines()))
     assert rows[0] == ["t_ms", "x_m", "z_m", "pitch_rad", "target0_u_px", "x_sigma_m",
-                       "z_sigma_m", "pitch_sigma_rad", "target0_u_sigma_px"]
+                       "z_sigma_m", "pitch_sigma_rad", "target0_u_sigma_px", "length_scale_sigma"]
     assert rows[2][0] == "0.000000" and rows[2][4] == "nan"
+    assert [float(r[-1]) for r in rows[1:]] == pytest.approx([1e-6 / 0.004] * 3)  # the scale's, relative
     assert float(rows[1][0]) == -1.0
+
+
+def test_tracks_csv_carries_the_scales_uncertainty_back_to_the_fit(tmp_path):
+    """The scale's error is common to every length of a film, not in the length channels'
+    sigmas: tracks.csv keeps it in its own column and a fit of the file reads it back."""
+    from identify.recordings.measurement import measurement_from_tracks_csv
+    from video.report import write_tracks_csv
+    from video.types import Tracks
+
+    t = np.arange(-5, 5) / 1000.0
+    ch = {"x_m": 15.0 * t, "z_m": np.zeros(10), "pitch_rad": np.zeros(10)}
+    tr = Tracks(t=t, channels=ch, sigma={k: np.full(10, 2e-4) for k in ch}, events_ms={}, contact_frame=5,
+                fps=1000.0, scale_m_per_px=0.004, scale_sigma=2e-5, impact_speed_mps=15.0, direction=1)
+    m = measurement_from_tracks_csv(write_tracks_csv(tr, tmp_path / "tracks.csv"))
+    assert m.length_scale_sigma == pytest.approx(0.005)
+    assert np.allclose(m.sigma["x_m"], 2e-4)
+    hand_made = tmp_path / "hand.csv"
+    hand_made.write_text("t_ms,x_m,x_sigma_m\n-1,-0.015,0.001\n0,0,0.001\n1,0.015,0.001\n")
+    assert measurement_from_tracks_csv(hand_made).length_scale_sigma is None

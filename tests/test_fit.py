@@ -41,6 +41,7 @@ def test_recovers_the_papers_parameters_within_two_sigma(paper_fit):
     assert abs(v["contact_time"] - 0.0004) < 3 * s["contact_time"]  # s; how fine: the next test
     assert all(ok for ok, _ in paper_fit.identified.values())
     assert "mu_face" not in paper_fit.values  # V-SIM's model unless asked for (FitOptions.face_friction)
+    assert "length_scale" not in paper_fit.values  # no scale's uncertainty given: held at 1
 
 
 def test_contact_time_is_resolved_to_a_tenth_of_a_millisecond_at_film_noise(a4):
@@ -51,6 +52,32 @@ def test_contact_time_is_resolved_to_a_tenth_of_a_millisecond_at_film_noise(a4):
     r = fit(synthetic_measurement(a4, named_params("paper_identified"), noise=noise, contact_time=0.0004), a4, model_error=NONE)
     assert r.std["contact_time"] < 0.0001
     assert abs(r.values["contact_time"] - 0.0004) < 3 * r.std["contact_time"]
+
+
+FILM_NOISE = {"x_m": 0.0003, "z_m": 0.0003, "pitch_rad": 0.0004, "front_wheel_angle_rad": 0.002,
+              "rear_wheel_angle_rad": 0.002}
+
+
+def test_a_films_scale_error_is_one_nuisance_with_its_measured_prior(a4):
+    """A film whose tape scale is 0.4 % long: every length it measures (x, z) is 0.4 % long,
+    its wheel angles are not. With the scale's uncertainty (0.5 %) the fit carries the scale
+    as one nuisance: the wheels' angles against x find it, and the impact speed and the
+    stiffness come back within their standard deviations, the scale's pull reported. Held
+    at 1 (the error taken for none), the speed comes out 0.4 % high, 3 sigmas off."""
+    m = synthetic_measurement(a4, named_params("paper_identified"), noise=FILM_NOISE, contact_time=0.0004)
+    long = {k: v * 1.004 if k in ("x_m", "z_m") else v for k, v in m.channels.items()}
+    film = dataclasses.replace(m, channels=long, impact_speed_mps=None, impact_speed_sigma=None,
+                               length_scale_sigma=0.005)
+    r = fit(film, a4, model_error=NONE)
+    assert abs(r.values["length_scale"] - 1.004) < 2 * r.std["length_scale"] and r.std["length_scale"] < 0.001
+    assert r.pulls()["length_scale"]["pull"] == pytest.approx((r.values["length_scale"] - 1.0) / 0.005)
+    speed = 56.3 / 3.6
+    assert abs(r.values["impact_speed"] - speed) < 2 * r.std["impact_speed"]
+    assert abs(r.values["k_compression"] - 970e3) < 2 * r.std["k_compression"]
+    held = fit(dataclasses.replace(film, length_scale_sigma=None), a4, model_error=NONE)
+    assert "length_scale" not in held.values
+    assert held.values["impact_speed"] / speed - 1 == pytest.approx(0.004, abs=0.001)
+    assert abs(held.values["impact_speed"] - speed) > 2.5 * held.std["impact_speed"]
 
 
 def test_fit_rms_is_the_noise_level(paper_fit):

@@ -4,7 +4,9 @@
 contact), then ``x_m, z_m, pitch_rad``, the other channels (crush, wheel angles and
 heights, per-target pixel centres), then one sigma column per channel named with
 ``_sigma`` before the unit (``x_sigma_m``, ``pitch_sigma_rad``, ``target0_u_sigma_px``).
-Values that were not measured (a lost target) are written ``nan``.
+Values that were not measured (a lost target) are written ``nan``. Last, the column
+``length_scale_sigma``: the scale's relative one-sigma uncertainty (the same in every row),
+an error common to every length of the film, which the length channels' own sigmas leave out.
 
 The report (``tracking_report.png``): the reference frame with the tapes, the targets
 (labelled with what they were found to be), the fitted silhouette and the CG drawn on
@@ -20,10 +22,11 @@ import numpy as np
 
 from video.types import Tracks
 
-__all__ = ["FIXED_COLUMNS", "sigma_name", "column_order", "tracks_csv", "write_tracks_csv",
+__all__ = ["FIXED_COLUMNS", "LENGTH_SCALE_COLUMN", "sigma_name", "column_order", "tracks_csv", "write_tracks_csv",
            "write_report"]
 
 FIXED_COLUMNS = ("x_m", "z_m", "pitch_rad")
+LENGTH_SCALE_COLUMN = "length_scale_sigma"  # the scale's relative sigma, after the sigma columns
 _PREFERRED = ("crush_m", "vx_mps", "front_wheel_angle_rad", "rear_wheel_angle_rad",
               "front_wheel_height_m", "rear_wheel_height_m")
 
@@ -56,7 +59,8 @@ def tracks_csv(tracks: Tracks) -> str:
     cols += [np.asarray(tracks.channels[c], float) for c in names]
     cols += [np.asarray(tracks.sigma.get(c, np.full(len(tracks.t), np.nan)), float)
              for c in names]
-    header = ["t_ms"] + names + [sigma_name(c) for c in names]
+    cols.append(np.full(len(tracks.t), tracks.scale_sigma / tracks.scale_m_per_px))
+    header = ["t_ms"] + names + [sigma_name(c) for c in names] + [LENGTH_SCALE_COLUMN]
     buf = io.StringIO()
     buf.write(",".join(header) + "\n")
     data = np.stack(cols, axis=1)

@@ -682,7 +682,7 @@ def _speed(p: _Pose, x_fit, cf: int, s: float, s_sig: float, speed_mps, notes: l
     return float(speed_mps)
 
 
-def _channels(p: _Pose, x_fit, tc: float, cf: int, s: float, s_sig: float, fps: float,
+def _channels(p: _Pose, x_fit, tc: float, cf: int, s: float, fps: float,
               car: CarGeometry, notes: list) -> tuple[dict, dict]:
     """x, z (m from the contact frame), pitch, vx and crush with their sigmas."""
     from video.motion import crush_from_pose
@@ -693,17 +693,18 @@ def _channels(p: _Pose, x_fit, tc: float, cf: int, s: float, s_sig: float, fps: 
                          f"(body targets lost there); x, z have no reference")
     x = XZ[:, 0] - XZ[cf, 0]
     z = XZ[:, 1] - XZ[cf, 1]
+    # the tracked point's noise; the scale's error is one number common to every length of
+    # the film (``Tracks.scale_sigma``), not noise of each sample, and is left out here
     sx = np.sqrt(p.pose.point_sigma**2 + p.pose.point_sigma[cf] ** 2) * s
-    sig_x = np.hypot(sx, np.abs(x) * s_sig / s)
     channels = {"x_m": x, "z_m": z, "pitch_rad": p.pitch}
-    sigma = {"x_m": sig_x, "z_m": np.hypot(sx, np.abs(z) * s_sig / s), "pitch_rad": p.pose.phi_sigma}
+    sigma = {"x_m": sx, "z_m": sx.copy(), "pitch_rad": p.pose.phi_sigma}
     try:
         vx = velocity(x, fps, VELOCITY_CFC, sigma_m=sx)
     except VideoError as err:
         notes.append(f"no vx_mps: {err}")
     else:
         channels["vx_mps"] = vx.values
-        sigma["vx_mps"] = np.hypot(vx.sigma, np.abs(vx.values) * s_sig / s)
+        sigma["vx_mps"] = vx.sigma
         notes.append(f"vx_mps: derivative of x_m filtered with SAE J211 CFC {vx.cfc}")
     # crush: the rigid outline past the front end's position at contact, where the CG
     # was at the contact instant: on the approach line (uniform motion)
@@ -716,7 +717,7 @@ def _channels(p: _Pose, x_fit, tc: float, cf: int, s: float, s_sig: float, fps: 
     front_ahead = float(np.max(car.silhouette_side[:, 0])) - car.x_cg
     channels["crush_m"] = crush_from_pose(x, p.pitch, car.silhouette_side, car.x_cg,
                                           car.cg_height, front_ahead + x_at_tc)
-    sigma["crush_m"] = sig_x.copy()
+    sigma["crush_m"] = sx.copy()
     notes.append("crush from the rigid passenger cell's travel past its position at "
                  "contact (the undeformed outline), not from the deformed front end")
     return channels, sigma
@@ -786,7 +787,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     tc, tc_sigma, cf, x_fit = _contact(film, p, dropped, cg_uv, cg_src, car, s, d, lens, stab,
                                        fps, n, config, notes)
     v_imp = _speed(p, x_fit, cf, s, s_sig, speed_mps, notes)
-    channels, sigma = _channels(p, x_fit, tc, cf, s, s_sig, fps, car, notes)
+    channels, sigma = _channels(p, x_fit, tc, cf, s, fps, car, notes)
     t = (np.arange(n) - cf) / fps
     events, events_sigma = _wheels(uv, tt, roles, ref, cf, t, fps, s, s_sig, d, p.axes, car, channels, sigma,
                                    notes, config.tyre_deflection)

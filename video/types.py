@@ -73,7 +73,9 @@ class Tracks:
         ``crush_m``, wheel angles and heights, ``target<k>_u_px`` ...). NaN where not
         measured.
     sigma : dict[str, (n,) float64]
-        One-standard-deviation uncertainty per sample, same keys as ``channels``.
+        One-standard-deviation uncertainty per sample, same keys as ``channels``; for the
+        lengths (x, z, vx, crush) the tracked point's noise alone: the scale's error
+        (``scale_sigma``) is common to every sample, not noise of each.
     events_ms : dict[str, float | None]
         Event times, ms after contact (``front_wheel_block`` ...).
     events_sigma_ms : dict[str, float]

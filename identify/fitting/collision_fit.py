@@ -47,6 +47,7 @@ from identify.fitting.least_squares import (
 from identify.fitting.model import (
     FACE_FRICTION_PRIOR,
     FACE_FRICTION_START,
+    LENGTH_CHANNELS,
     OFFSET_FREE,
     FreeParameter,
     assemble,
@@ -304,8 +305,17 @@ def model_on_clock(values, data, channels, n_out: int, solver: Solver):
     params, speed, contact_time = assemble(data["template"], values, data["speed_guess"])
     vehicle = vehicle_with(data["vehicle"], values)
     traj = _run(params, vehicle, speed, n_out, solver)
-    preds = [predict(traj, c, data["t"], speed, contact_time, vehicle.wheel_radius, solver.output_dt) for c in channels]
+    preds = [in_recording_lengths(predict(traj, c, data["t"], speed, contact_time, vehicle.wheel_radius,
+                                          solver.output_dt), c, values) for c in channels]
     return traj, preds, speed
+
+
+def in_recording_lengths(pred, channel: str, values):
+    """The model's ``channel`` as the recording measures it: a length (``LENGTH_CHANNELS``)
+    times the fitted ``length_scale`` when ``values`` has one (a film's scale error)."""
+    if channel in LENGTH_CHANNELS and "length_scale" in values:
+        return pred * values["length_scale"]
+    return pred
 
 
 model_on_clock_jit = jax.jit(model_on_clock, static_argnames=("channels", "n_out", "solver"))
@@ -574,6 +584,10 @@ def fit(
     unknown = sorted(set(held) - {p.name for p in free})
     if unknown:
         raise ValueError(f"held parameter {unknown[0]!r} is not in free")
+    # a film's scale error is one nuisance with the scale's measured uncertainty as its prior
+    # (``identify.fitting.model.LENGTH_CHANNELS``); a recording without one (sensors) holds it at 1
+    if any(p.name == "length_scale" for p in free) and not measurement.length_scale_sigma:
+        held.setdefault("length_scale", 1.0)
     # a first contact measured apart from the fitted channels (seen in the film, the load
     # cells' onset) is a measurement, not a knob: held, not fitted, its sigma carried into the
     # others' covariance (least_squares.held_at_measurement). As a prior it was outweighed by
@@ -595,6 +609,7 @@ def fit(
         "impact_speed": speed_guess,
         "contact_time": 0.0,
         "mu_face": FACE_FRICTION_START,
+        "length_scale": 1.0,
         **(initial or {}),
     }
     priors = dict(priors or {})
@@ -605,6 +620,8 @@ def fit(
     names = {p.name for p in free} - set(held)
     if speed_mps is None and measurement.impact_speed_sigma and "impact_speed" in names:
         priors.setdefault("impact_speed", (float(speed_guess), float(measurement.impact_speed_sigma)))
+    if "length_scale" in names:
+        priors.setdefault("length_scale", (1.0, float(measurement.length_scale_sigma)))
     if "mu_face" in names:  # prior knowledge, not a measurement (FACE_FRICTION_PRIOR)
         priors.setdefault("mu_face", FACE_FRICTION_PRIOR)
     if measurement.contact_time_sigma and "contact_time" in names:
@@ -699,8 +716,8 @@ def fit(
         rms[name] = float(np.sqrt(np.mean((pred - y[c])[valid] ** 2)))
     for name in measurement.derived:  # shown: a derived channel with no valid sample is not in the stack
         if name in measurement.channels and name not in OFFSET_FREE and name not in predictions:
-            pred = np.asarray(predict(traj, name, jnp.asarray(measurement.t), speed, contact_time,
-                                      vehicle.wheel_radius, options.solver.output_dt))
+            pred = np.asarray(in_recording_lengths(predict(traj, name, jnp.asarray(measurement.t), speed, contact_time,
+                                                           vehicle.wheel_radius, options.solver.output_dt), name, every))
             valid = measurement.valid(name)
             predictions[name] = pred
             rms[name] = float(np.sqrt(np.mean((pred - measurement.channels[name])[valid] ** 2)))

@@ -23,8 +23,15 @@ import numpy as np
 
 from sim import Params
 
-NUISANCE = ("impact_speed", "contact_time")
+NUISANCE = ("impact_speed", "contact_time", "length_scale")
 CONTACT_TIME_RANGE = 0.010  # s: the model's contact may differ from the measured one by this much
+# A film's lengths are its pixels times one scale (the tape's, or the hubs' spacing over the
+# wheelbase), so the scale's error is one number common to every length the film measures,
+# not noise of each sample: the fit carries it as the nuisance ``length_scale`` (the
+# recording's lengths over the true ones) with the scale's measured uncertainty as its
+# prior (``Measurement.length_scale_sigma``); these channels are multiplied by it.
+LENGTH_CHANNELS = ("x_m", "z_m", "vx_mps", "crush_m", "engine_x_m", "engine_vx_mps")
+LENGTH_SCALE_RANGE = 0.05  # the fitted scale error stays within +-5 % (tanh)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,7 +132,8 @@ FACE_FRICTION_START = 0.01
 def base_parameters(face_friction: bool = False) -> tuple[FreeParameter, ...]:
     """The four collision parameters of the paper, with ``face_friction`` the barrier face's
     friction (``mu_face``, with the prior ``FACE_FRICTION_PRIOR``; ``FitOptions.face_friction``),
-    and the two nuisance parameters."""
+    and the three nuisance parameters (the fit holds ``length_scale`` at 1 for a recording
+    without a scale's uncertainty: sensors, whose lengths are integrated accelerations)."""
     face = (FreeParameter("mu_face", "1", "logit", lower=0.0, upper=1.0, floor_is_physical=True),)
     return (
         FreeParameter("k_compression", "N/m^3", "log", scale=1e6),
@@ -135,6 +143,7 @@ def base_parameters(face_friction: bool = False) -> tuple[FreeParameter, ...]:
         *(face if face_friction else ()),
         FreeParameter("impact_speed", "m/s", "log", scale=SPEED_SCALE),
         FreeParameter("contact_time", "s", "tanh", scale=CONTACT_TIME_RANGE),
+        FreeParameter("length_scale", "1", "tanh", scale=LENGTH_SCALE_RANGE, centre=1.0),
     )
 
 

@@ -49,7 +49,9 @@ def measurement_from_tracks(tracks, source: str) -> Measurement:
     measured impact speed rides along (its uncertainty comes from the approach frames,
     which the fit sees itself, so it enters without a prior); first contact enters as a
     measurement when the picture showed it (the front end stopping at the barrier, apart
-    from the fitted motion), not when it came from the motion's deceleration onset."""
+    from the fitted motion), not when it came from the motion's deceleration onset. The
+    scale's uncertainty is one error common to every length (``Measurement.length_scale_sigma``),
+    the length channels' sigmas their noise alone."""
     channels = {k: np.asarray(v, float) for k, v in tracks.channels.items() if k in KNOWN_CHANNELS}
     sigma = {k: np.asarray(tracks.sigma[k], float) for k in channels}
     speed = float(tracks.impact_speed_mps) if np.isfinite(tracks.impact_speed_mps) else None
@@ -61,6 +63,7 @@ def measurement_from_tracks(tracks, source: str) -> Measurement:
         impact_speed_mps=speed,
         contact_time_sigma=tracks.contact_sigma_s,
         contact_time_s=float(tracks.contact_offset_s) if tracks.contact_sigma_s else 0.0,
+        length_scale_sigma=float(tracks.scale_sigma / tracks.scale_m_per_px),
         source=source,
         events_ms=events,
         notes=tuple(tracks.notes),

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from identify.errors import UserError
+from video.report import LENGTH_SCALE_COLUMN
 
 KNOWN_CHANNELS = {
     "x_m": "m",
@@ -44,6 +45,7 @@ KNOWN_CHANNELS = {
     "engine_vx_mps": "m/s",
     "force_N": "N",
 }
+
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +66,11 @@ class Measurement:
     contact_time_s : s, that measured instant on the clock of ``t`` (t = 0 is the sample at
         or just after it, so it lies within one sample interval before 0); used with
         ``contact_time_sigma``.
+    length_scale_sigma : relative one-sigma uncertainty of the scale every length of the
+        recording was measured with (a film's tape or hub scale: one error common to all its
+        lengths, which the fit carries as the nuisance ``length_scale``,
+        ``identify.fitting.model.LENGTH_CHANNELS``), or None (sensors; lengths whose sigma
+        already holds it). A length channel's ``sigma`` is then its noise alone.
     source : what the recording was (a file name), for reports.
     events_ms : events seen in the recording (e.g. ``front_wheel_block``), ms after contact.
     notes : things a person should read about the recording.
@@ -81,6 +88,7 @@ class Measurement:
     impact_speed_sigma: float | None = None
     contact_time_sigma: float | None = None
     contact_time_s: float = 0.0
+    length_scale_sigma: float | None = None
     source: str = ""
     events_ms: dict[str, float] = dataclasses.field(default_factory=dict)
     notes: tuple[str, ...] = ()
@@ -107,6 +115,10 @@ class Measurement:
             math.isfinite(self.contact_time_sigma) and self.contact_time_sigma > 0
         ):
             raise UserError(f"{self.source or 'measurement'}: the contact time's sigma must be > 0 s")
+        if self.length_scale_sigma is not None and not (
+            math.isfinite(self.length_scale_sigma) and self.length_scale_sigma > 0
+        ):
+            raise UserError(f"{self.source or 'measurement'}: the length scale's relative sigma must be > 0")
         object.__setattr__(self, "t", t)
 
     @property
@@ -139,7 +151,9 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
     """Read a ``tracks.csv`` (``docs/interface.md``: ``t_ms`` first, channel columns, and
     ``<name>_sigma`` or ``<stem>_sigma_<unit>`` columns where the video stage wrote them).
 
-    A channel without a sigma column gets ``sigma_floor`` in its unit: say so in notes.
+    A channel without a sigma column gets ``sigma_floor`` in its unit: say so in notes. A
+    ``length_scale_sigma`` column (the video stage's, one value) is the film's scale
+    uncertainty (``Measurement.length_scale_sigma``).
     With both ``x_m`` and ``vx_mps``, the velocity is taken as derived from the displacement
     (as the video stage derives it) and not fitted; the engine's likewise.
     """
@@ -179,5 +193,9 @@ def measurement_from_tracks_csv(path: Path, sigma_floor: float = 1e-4) -> Measur
             notes.append(f"{name}: no sigma column, {sigma_floor:g} assumed")
         channels[name] = cols[name]
     derived = tuple(v for x, v in (("x_m", "vx_mps"), ("engine_x_m", "engine_vx_mps")) if {x, v} <= set(channels))
+    scale_sigma = None
+    if LENGTH_SCALE_COLUMN in cols:  # the video stage's: its lengths' sigmas are then their noise alone
+        finite = cols[LENGTH_SCALE_COLUMN][np.isfinite(cols[LENGTH_SCALE_COLUMN])]
+        scale_sigma = float(finite[0]) if len(finite) else None
     return Measurement(t=cols["t_ms"] / 1000.0, channels=channels, sigma=sigma, source=str(path), notes=tuple(notes),
-                       derived=derived)
+                       derived=derived, length_scale_sigma=scale_sigma)

@@ -12,7 +12,8 @@ PARAMETER_ROWS = (
 
 
 # what a prior is, in the reader's units: the recording's measurements of the nuisances
-MEASURED = {"impact_speed": ("impact speed", 3.6, "km/h"), "contact_time": ("first contact", 1e3, "ms")}
+MEASURED = {"impact_speed": ("impact speed", 3.6, "km/h"), "contact_time": ("first contact", 1e3, "ms"),
+            "length_scale": ("the film's scale (its lengths over the true ones)", 1.0, "")}
 
 
 def misfit_weights_sentence(widened: dict) -> str:
