@@ -207,6 +207,40 @@ def measure_scale(frame: np.ndarray, tape_segment_m: float, *, frame_index: int 
                          ignored=tuple(ignored), lens=lens, notes=tuple(notes))
 
 
+def rescaled(est: ScaleEstimate, lens: LensDistortion, k1_sigma: float = 0.0,
+             tilt_sigma: np.ndarray = np.zeros(2), note: str = "") -> ScaleEstimate:
+    """The tapes' scale measured again through another map of the camera (``lens``, e.g.
+    :func:`video.calibrate_motion.map_from_approach`'s): each tape's pitch on its edges
+    undistorted by ``lens``, combined as :func:`measure_scale` does; the map's one-sigma
+    (``k1_sigma``, ``tilt_sigma`` per component) moves every tape's pitch together and is
+    added to the pitch's sigma. An estimate without tapes (the hubs' scale) is returned
+    with only its lens replaced."""
+    if not est.tapes:
+        return replace(est, lens=lens, notes=est.notes + ((note,) if note else ()))
+    pitches = [_pitch_undistorted(t, lens) for t in est.tapes]
+    p = np.array([x[0] for x in pitches])
+    sp = np.array([x[1] for x in pitches])
+    wts = 1.0 / sp ** 2
+    pitch = float(np.sum(wts * p) / np.sum(wts))
+    psig = float(1.0 / np.sqrt(np.sum(wts)))
+    if len(p) > 1:
+        chi2 = float(np.sum(wts * (p - pitch) ** 2) / (len(p) - 1))
+        if chi2 > 1.0:
+            psig *= np.sqrt(chi2)
+    shifted = []
+    if np.isfinite(k1_sigma) and k1_sigma > 0:
+        shifted.append(replace(lens, k1=lens.k1 + k1_sigma))
+    for i in range(2):
+        if np.isfinite(tilt_sigma[i]) and tilt_sigma[i] > 0:
+            shifted.append(replace(lens, tilt=lens.tilt + np.eye(2)[i] * tilt_sigma[i]))
+    for m in shifted:
+        other = float(np.sum(wts * np.array([_pitch_undistorted(t, m)[0] for t in est.tapes])) / np.sum(wts))
+        psig = float(np.hypot(psig, other - pitch))
+    m_per_px = est.tape_segment_m / pitch
+    return replace(est, m_per_px=m_per_px, sigma=m_per_px * psig / pitch, pitch_px=pitch, pitch_sigma_px=psig,
+                   lens=lens, notes=est.notes + ((note,) if note else ()))
+
+
 #: Largest change along a tape's centre line between frame 0 and a later frame (the mean
 #: over the line), as a share of its dark-to-light contrast, for it to have stood still
 #: (noise and compression change a few grey levels; a tape carried by a share q of its

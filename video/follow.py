@@ -94,6 +94,11 @@ class TrackerConfig:
         Allow for the tyre's unknown static deflection when a wheel leaves or meets the
         floor (``video.motion.lift_time``: the event bracketed); off only to measure what
         it does (the lift at the hub's first rise, as a rigid tyre would have it).
+    map_from_approach : bool
+        Fit the lens's radial distortion and the camera's yaw and pitch against the car's
+        plane to the targets' approach (``video.calibrate_motion``: a common uniform
+        translation) and use that map instead of the tapes'; off only to measure what it
+        does.
     """
 
     search_px: float = 8.0
@@ -110,6 +115,7 @@ class TrackerConfig:
     hub_scale: bool = True
     correct_yaw: bool = True
     tyre_deflection: bool = True
+    map_from_approach: bool = True
 
 
 @dataclass(frozen=True)

@@ -625,6 +625,30 @@ def _onset_sse(t, x, w, tc, p):
     return float(r @ r), coef
 
 
+def deceleration_start(t: np.ndarray, x: np.ndarray) -> float:
+    """Where the speed (differences of ``x`` over 5 frames) falls 2 % below the approach
+    speed and stays there for 10 samples, s (a repeated frame makes a dip of only 5):
+    :func:`contact_time`'s first guess, at or after the onset. VideoError when the car
+    does not move towards the barrier at first, or never decelerates."""
+    ok = np.isfinite(x)
+    if ok.sum() < 10:
+        raise VideoError("fewer than 10 frames with the car's position; cannot find the contact")
+    tt, xx = t[ok], x[ok]
+    lag = 5
+    v = (xx[lag:] - xx[:-lag]) / (tt[lag:] - tt[:-lag])
+    n0 = max(3, len(v) // 8)
+    v0 = float(np.median(v[:n0]))
+    if not v0 > 0:
+        raise VideoError("the car does not move towards the barrier at the start of the film; "
+                         "the film must begin before contact")
+    slow = _first_run(v < 0.98 * v0, 2 * lag)
+    if slow is None:
+        raise VideoError("the car never decelerates in the film: no contact with the barrier "
+                         "found; check that the film includes the impact")
+    # v[j] is the speed between samples j and j + lag, centred at j + lag / 2
+    return float(tt[min(slow + lag, len(tt) - 1)])
+
+
 def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
                  window_after_s: float = 0.012) -> tuple[float, str]:
     """Time at which the car's deceleration starts, s (sub-frame).
@@ -651,24 +675,9 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
         A short description for the notes.
     """
     ok = np.isfinite(x)
-    if ok.sum() < 10:
-        raise VideoError("fewer than 10 frames with the car's position; cannot find the contact")
+    guess = deceleration_start(t, x)
     tt, xx = t[ok], x[ok]
     ss = np.maximum(np.where(np.isfinite(sigma[ok]), sigma[ok], np.nanmedian(sigma)), 1e-7)
-    lag = 5
-    v = (xx[lag:] - xx[:-lag]) / (tt[lag:] - tt[:-lag])
-    n0 = max(3, len(v) // 8)
-    v0 = float(np.median(v[:n0]))
-    if not v0 > 0:
-        raise VideoError("the car does not move towards the barrier at the start of the film; "
-                         "the film must begin before contact")
-    # the deceleration persists (a repeated frame makes a dip of only ``lag`` samples)
-    slow = _first_run(v < 0.98 * v0, 2 * lag)
-    if slow is None:
-        raise VideoError("the car never decelerates in the film: no contact with the barrier "
-                         "found; check that the film includes the impact")
-    # v[j] is the speed between samples j and j + lag, centred at j + lag / 2
-    guess = tt[min(slow + lag, len(tt) - 1)]
     lo = guess - 0.03
     hi_fit = guess + window_after_s
     sel = (tt >= lo - 0.03) & (tt <= hi_fit)
