@@ -38,7 +38,7 @@ from accuracy import SEED_BASE, world_plan  # noqa: E402
 
 # the baselines: each the TrackerConfig field of its name switched off
 BASELINES = {name: {name: False} for name in ("stabilise", "background_shake", "see_contact", "hub_scale",
-                                              "correct_yaw", "tyre_deflection")}
+                                              "correct_yaw", "tyre_deflection", "map_from_approach")}
 
 
 def track_world(seed: int, effect: str, baseline: str) -> dict:
