@@ -113,6 +113,13 @@ EDGE_ROWS_SHARE = 0.6
 #: cent off the picture's centre, and a camera yawed by up to 5 degrees against the car's
 #: plane (f tan 5 deg, f up to 1.2 widths), move that column by up to this much
 VANISH_MARGIN = 0.15
+#: A stop is seen only within this many frame intervals of a frame that showed the front
+#: end moving with the cell: across a longer run of frames without it (the front as grey
+#: as what is behind it, debris at the face) the stop's time is the rigid path extrapolated
+#: to a column where something else may stand (on development film 960005 debris flung
+#: from the face, 3.8 frames after the front was last seen: a stop 7.6 ms late; on 960016
+#: the barrier's edge, 17 frames after: 8 ms late)
+MAX_UNSEEN_FRAMES = 3.0
 #: The front end is followed in frames where the rigid nose stands at least twice this far
 #: beyond its place in frame 0 (the outline's nose, set right by the picture's front to
 #: within NOSE_OFF_PX), looked for from half-way there, or from ``search_px + 2`` px beyond
@@ -640,6 +647,12 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     ts, ts_sig, stop_u, gain, reduced = found
     if gain < MIN_CHI2_GAIN:
         return not_seen(f"the front end does not stop in frames {i0}-{i1}{which} (chi-square gain {gain:.1f})")
+    moving = _last_seen_moving(t[idx], u_rigid, u_seen, s_seen, ts, stop_u)
+    if moving is None or ts - moving > MAX_UNSEEN_FRAMES / fps:
+        since = "" if moving is None else f", {(ts - moving) * 1e3:.2f} ms after the last frame that showed it moving"
+        return not_seen(f"the front end stops at {ts * 1e3:.2f} ms at column {stop_u:.1f} px{since} with the cell: "
+                        f"across more than {MAX_UNSEEN_FRAMES:g} frames unseen the stop is the rigid path extrapolated "
+                        "to what stands there (debris at the face, an edge), not the front seen stopping")
     # a stop where the car would not have stood out of the background had it gone on (the
     # car as grey as the barrier it passes in front of) cannot be told from passing on
     i_last, gray, rows, band, shift, v_nose = last
@@ -745,6 +758,21 @@ def _last_moving(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: 
         return None
     ok = np.isfinite(u_seen) & np.isfinite(u_rigid) & (t < t_ahead - 0.5 * dt)
     moving = ok & (np.abs(u_seen - u_rigid - c) <= OUTLIER * sigma + 1.0)
+    return float(t[moving][-1]) if moving.any() else None
+
+
+def _last_seen_moving(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+                      ts: float, stop_u: float) -> float | None:
+    """The last frame before the stop at ``ts`` (s, at column ``stop_u`` px) that shows the
+    front end moving with the cell: where the stop model puts the front (the rigid one plus
+    the offset ``stop_u - u_rigid(ts)``) within :data:`OUTLIER` sigmas and a pixel, and
+    further than :data:`OUTLIER` sigmas from the stop column (a frame whose front stands
+    there already does not tell moving from stopped), s; None when no frame does."""
+    ok = np.isfinite(u_seen) & np.isfinite(u_rigid) & np.isfinite(sigma) & (t < ts)
+    if not ok.any():
+        return None
+    c = stop_u - float(np.interp(ts, t[np.isfinite(u_rigid)], u_rigid[np.isfinite(u_rigid)]))
+    moving = ok & (np.abs(u_seen - u_rigid - c) <= OUTLIER * sigma + 1.0) & (np.abs(u_seen - stop_u) > OUTLIER * sigma)
     return float(t[moving][-1]) if moving.any() else None
 
 
