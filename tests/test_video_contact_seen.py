@@ -535,3 +535,21 @@ def test_a_film_whose_cg_is_not_located_says_its_contact_was_not_looked_for_in_t
     assert tc_sigma is None and tc == pytest.approx(tc_true, abs=1e-3) and abs(cf - tc_true * FPS) < 1.0
     said = [n for n in notes if n.startswith("first contact not seen in the picture: not looked for")]
     assert len(said) == 1 and "the CG is not located" in said[0] and "deceleration onset alone" in said[0], notes
+
+
+def test_the_last_frame_that_shows_the_front_moving_is_neither_unseen_nor_at_the_stop():
+    from video.contact_seen import MAX_UNSEEN_FRAMES, _last_seen_moving
+
+    t = np.arange(30) / FPS
+    rigid = 500.0 + 2.0 * np.arange(30)
+    seen = rigid + 0.5
+    # moving with the cell up to frame 10, unseen 11-16, then at the stop column from 17 on
+    seen[11:17] = np.nan
+    stop_u = rigid[15] + 0.5
+    seen[17:] = stop_u
+    sig = np.full(30, 0.3)
+    assert _last_seen_moving(t, rigid, seen, sig, t[15], stop_u) == pytest.approx(t[10])
+    assert (t[15] - t[10]) * FPS > MAX_UNSEEN_FRAMES
+    # frames already standing at the stop column do not show it moving (a barrier's edge)
+    edge = np.where(np.arange(30) >= 5, stop_u, np.nan)
+    assert _last_seen_moving(t, rigid, edge, sig, t[15], stop_u) is None

@@ -558,7 +558,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     level = float(np.median(row_level[told]))
     threshold = 0.5 * level
     # the rows where the car stands out of the background, as offsets in the reference frame
-    told_ref = rows[told] - (nose[1] - nose_ref[1])
+    told_ref = rows[told] - (raw[1] - nose_ref[1])
     u_rigid = np.full(len(idx), np.nan)
     # the front end per frame, its sigma and how far the rows that showed it stand behind
     # the tip (px): as the rows' most forward share shows it, and as their median does
@@ -568,7 +568,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     last = None  # the last frame where the front end was found
     for k, i, nose, raw, rows, shift in placed:
         u_rigid[k] = nose[0]
-        band, rows = rows, _rows_told(rows, nose[1] - nose_ref[1], told_ref)
+        band, rows = rows, _rows_told(rows, raw[1] - nose_ref[1], told_ref)
         moved = d * (raw[0] - nose0[0])
         if moved < 2.0 * FRAME0_CLEAR_PX:
             continue  # the front end may still stand where the car stood in the background's frames
@@ -582,11 +582,11 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
         if not len(front):
             continue
         _, _, front_rows, row_u = front.found
-        lags = (np.asarray(row_lag_px(front_rows - (nose[1] - nose_ref[1])), float) if row_lag_px is not None
+        lags = (np.asarray(row_lag_px(front_rows - (raw[1] - nose_ref[1])), float) if row_lag_px is not None
                 else np.full(len(front_rows), np.nan))
         for q, (u_q, s_q, lag_q) in series.items():
             u, s_q[k] = front_of_rows(row_u, d, q)
-            u_q[k] = float(to_pose(i, np.array([[u, nose[1]]]))[0, 0])
+            u_q[k] = float(to_pose(i, np.array([[u, raw[1]]]))[0, 0])
             if np.isfinite(lags).any():
                 # the rows that stand for the front: their lags at the same quantile
                 lag_q[k] = float(np.nanquantile(lags, 1.0 - q))
@@ -848,7 +848,7 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
         if not len(front):
             return (f"the car's front end not found in frame {i} within {LOCATE_PX:g} px ahead of the "
                     "vehicle outline's nose")
-        return float(to_pose(i, np.array([[front.found[0], nose[1]]]))[0, 0] - nose[0])
+        return float(to_pose(i, np.array([[front.found[0], raw[1]]]))[0, 0] - nose[0])
     return (f"the car does not move {2 * search_px + 4:g} px from where it stood at the film's start within frames "
             f"{idx[0]}-{idx[-1]} around the deceleration onset: no background to see its front against")
 
@@ -856,12 +856,14 @@ def _locate_front(frame_at, idx, pose, nose_ref, nose0, rows_ref, d, background,
 def _nose_in_frame(pose: BodyPose, i: int, nose_ref: np.ndarray, rows_ref: tuple[float, float],
                    to_pose: Callable[[int, np.ndarray], np.ndarray]) -> tuple:
     """Where the rigidly carried nose is in frame ``i``: (nose in pose coordinates, the
-    same in the raw picture, the nose's rows there, and the camera's shake since frame 0
-    at that point (the lens's correction cancels)), px."""
+    same in the raw picture, the nose's rows there (the raw picture's: the reference
+    frame's band moved to the raw nose, as every column is sampled in the raw picture; a
+    lens or tilt taken out moves a nose near the picture's edge by a few rows), and the
+    camera's shake since frame 0 at that point (the lens's correction cancels)), px."""
     nose = pose.transform(i, nose_ref[None])[0]
     raw = raw_points(to_pose, i, nose[None])[0]
     v0, v1 = rows_ref
-    dv = nose[1] - nose_ref[1]
+    dv = raw[1] - nose_ref[1]
     rows = np.arange(np.ceil(v0 + dv), np.floor(v1 + dv) + 1)
     shift = to_pose(0, raw[None])[0] - to_pose(i, raw[None])[0]
     return nose, raw, rows, shift
