@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -69,6 +70,18 @@ def _pitch_undistorted(tape: Tape, lens: LensDistortion) -> tuple[float, float]:
         s = -s
     _, p, sp, _ = _fit_pitch(s, tape.edge_index)
     return p, sp
+
+
+def _combined_pitch(pitches) -> tuple[float, float, np.ndarray, float]:
+    """The tapes' segment pitches ((px, sigma) each) combined: (inverse-variance mean px, its
+    sigma widened by the reduced chi-square when the tapes disagree beyond their sigmas, the
+    weights, that reduced chi-square (0 for one tape))."""
+    p = np.array([x[0] for x in pitches])
+    wts = 1.0 / np.array([x[1] for x in pitches]) ** 2
+    pitch = float(np.sum(wts * p) / np.sum(wts))
+    psig = float(1.0 / np.sqrt(np.sum(wts)))
+    chi2 = float(np.sum(wts * (p - pitch) ** 2) / (len(p) - 1)) if len(p) > 1 else 0.0
+    return pitch, psig * math.sqrt(max(chi2, 1.0)), wts, chi2
 
 
 def measure_scale(frame: np.ndarray, tape_segment_m: float, *, frame_index: int = 0,
@@ -179,19 +192,11 @@ def measure_scale(frame: np.ndarray, tape_segment_m: float, *, frame_index: int 
         pitches = [_pitch_undistorted(t, lens) for t in used]
     else:
         pitches = [(t.pitch_px, t.pitch_sigma_px) for t in used]
-    p = np.array([x[0] for x in pitches])
-    sp = np.array([x[1] for x in pitches])
-    wts = 1.0 / sp ** 2
-    pitch = float(np.sum(wts * p) / np.sum(wts))
-    psig = float(1.0 / np.sqrt(np.sum(wts)))
-    if len(p) > 1:
-        chi2 = float(np.sum(wts * (p - pitch) ** 2) / (len(p) - 1))
-        if chi2 > 1.0:
-            psig *= np.sqrt(chi2)
-        if chi2 > 9.0:
-            notes.append(f"the {len(p)} tapes disagree on the segment pitch "
-                         f"({', '.join(f'{x:.3f}' for x in p)} px): are they all in the "
-                         "car's plane and of the same segment length? uncertainty inflated")
+    pitch, psig, wts, chi2 = _combined_pitch(pitches)
+    if chi2 > 9.0:
+        notes.append(f"the {len(pitches)} tapes disagree on the segment pitch "
+                     f"({', '.join(f'{x[0]:.3f}' for x in pitches)} px): are they all in the "
+                     "car's plane and of the same segment length? uncertainty inflated")
     # the map's uncertainty moves every tape's pitch together: the same combination of the
     # pitches measured through each shifted map, against the one through the map used
     if shifted:
@@ -217,16 +222,7 @@ def rescaled(est: ScaleEstimate, lens: LensDistortion, k1_sigma: float = 0.0,
     with only its lens replaced."""
     if not est.tapes:
         return replace(est, lens=lens, notes=est.notes + ((note,) if note else ()))
-    pitches = [_pitch_undistorted(t, lens) for t in est.tapes]
-    p = np.array([x[0] for x in pitches])
-    sp = np.array([x[1] for x in pitches])
-    wts = 1.0 / sp ** 2
-    pitch = float(np.sum(wts * p) / np.sum(wts))
-    psig = float(1.0 / np.sqrt(np.sum(wts)))
-    if len(p) > 1:
-        chi2 = float(np.sum(wts * (p - pitch) ** 2) / (len(p) - 1))
-        if chi2 > 1.0:
-            psig *= np.sqrt(chi2)
+    pitch, psig, wts, _ = _combined_pitch([_pitch_undistorted(t, lens) for t in est.tapes])
     shifted = []
     if np.isfinite(k1_sigma) and k1_sigma > 0:
         shifted.append(replace(lens, k1=lens.k1 + k1_sigma))
