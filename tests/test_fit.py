@@ -41,7 +41,7 @@ def test_recovers_the_papers_parameters_within_two_sigma(paper_fit):
     assert abs(v["contact_time"] - 0.0004) < 3 * s["contact_time"]  # s; how fine: the next test
     assert all(ok for ok, _ in paper_fit.identified.values())
     assert "mu_face" not in paper_fit.values  # V-SIM's model unless asked for (FitOptions.face_friction)
-    assert "length_scale" not in paper_fit.values  # no scale's uncertainty given: held at 1
+    assert "length_scale" not in paper_fit.values  # no scale's uncertainty given: no scale fitted
 
 
 def test_contact_time_is_resolved_to_a_tenth_of_a_millisecond_at_film_noise(a4):

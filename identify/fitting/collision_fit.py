@@ -48,6 +48,7 @@ from identify.fitting.model import (
     FACE_FRICTION_PRIOR,
     FACE_FRICTION_START,
     LENGTH_CHANNELS,
+    LENGTH_SCALE,
     OFFSET_FREE,
     FreeParameter,
     assemble,
@@ -540,7 +541,9 @@ def fit(
     template : the fixed parameters and mechanisms (default: the base model, V-SIM's defaults
         with the engine on its mounts, ``identify.discover.candidates.with_base_mechanisms``).
     free : what to fit (default: ``base_parameters(options.face_friction)``: the four collision
-        parameters, the barrier face's friction if asked for, impact speed, contact time).
+        parameters, the barrier face's friction if asked for, impact speed, contact time); a
+        film's scale (``identify.fitting.model.LENGTH_SCALE``) is added to any ``free`` when
+        the measurement has its uncertainty (``Measurement.length_scale_sigma``).
     initial : physical starting values by name (default: the template's; speed measured).
     speed_mps : impact speed (m/s) if known; else the measurement's; a measured speed with a
         sigma enters as a prior, a given one is held fixed.
@@ -580,14 +583,14 @@ def fit(
         if speed_mps is not None:
             free = tuple(p for p in free if p.name != "impact_speed")
     free = tuple(free)
+    # a film's scale error is one nuisance with the scale's measured uncertainty as its prior
+    # (``identify.fitting.model.LENGTH_CHANNELS``); a recording without one (sensors) has none
+    if measurement.length_scale_sigma and not any(p.name == "length_scale" for p in free):
+        free = free + (LENGTH_SCALE,)
     held = dict(held or {})
     unknown = sorted(set(held) - {p.name for p in free})
     if unknown:
         raise ValueError(f"held parameter {unknown[0]!r} is not in free")
-    # a film's scale error is one nuisance with the scale's measured uncertainty as its prior
-    # (``identify.fitting.model.LENGTH_CHANNELS``); a recording without one (sensors) holds it at 1
-    if any(p.name == "length_scale" for p in free) and not measurement.length_scale_sigma:
-        held.setdefault("length_scale", 1.0)
     # a first contact measured apart from the fitted channels (seen in the film, the load
     # cells' onset) is a measurement, not a knob: held, not fitted, its sigma carried into the
     # others' covariance (least_squares.held_at_measurement). As a prior it was outweighed by

@@ -132,8 +132,7 @@ FACE_FRICTION_START = 0.01
 def base_parameters(face_friction: bool = False) -> tuple[FreeParameter, ...]:
     """The four collision parameters of the paper, with ``face_friction`` the barrier face's
     friction (``mu_face``, with the prior ``FACE_FRICTION_PRIOR``; ``FitOptions.face_friction``),
-    and the three nuisance parameters (the fit holds ``length_scale`` at 1 for a recording
-    without a scale's uncertainty: sensors, whose lengths are integrated accelerations)."""
+    and the two nuisance parameters (a film's third, its scale, the fit adds: ``LENGTH_SCALE``)."""
     face = (FreeParameter("mu_face", "1", "logit", lower=0.0, upper=1.0, floor_is_physical=True),)
     return (
         FreeParameter("k_compression", "N/m^3", "log", scale=1e6),
@@ -143,8 +142,12 @@ def base_parameters(face_friction: bool = False) -> tuple[FreeParameter, ...]:
         *(face if face_friction else ()),
         FreeParameter("impact_speed", "m/s", "log", scale=SPEED_SCALE),
         FreeParameter("contact_time", "s", "tanh", scale=CONTACT_TIME_RANGE),
-        FreeParameter("length_scale", "1", "tanh", scale=LENGTH_SCALE_RANGE, centre=1.0),
     )
+
+
+# The film's scale error (``LENGTH_CHANNELS``): the fit adds it to what it moves for a recording
+# with a scale's uncertainty (``Measurement.length_scale_sigma``), with that as its prior.
+LENGTH_SCALE = FreeParameter("length_scale", "1", "tanh", scale=LENGTH_SCALE_RANGE, centre=1.0)
 
 
 def assemble(template: Params, values: dict, default_speed):
