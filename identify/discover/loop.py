@@ -182,6 +182,8 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     names = [p.name for p in (free if free is not None else base_parameters())]
     if speed_mps is not None and "impact_speed" in names:
         names.remove("impact_speed")
+    if measurement.length_scale_sigma:  # a film's scale (fit adds it; here in the spec's base part, as later fits have it)
+        names.append("length_scale")
     template = make_params(k_compression=730e3, k_restitution=730e3, restitution=0.2, dz_contact=0.0)
     measured = measured_effects(measurement)
     kwargs = dict(template=superset_template(template, vehicle), free=superset_spec(names), speed_mps=speed_mps,

@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 
 from identify.discover.candidates.base import NEVER_REACHED, SEEN, Candidate
-from identify.fitting.model import base_parameters, vehicle_value
+from identify.fitting.model import LENGTH_SCALE, base_parameters, vehicle_value
 from sim import Params
 
 REGISTRY = (
@@ -111,7 +111,7 @@ def superset_template(params: Params, vehicle) -> Params:
 def superset_spec(base_names) -> tuple:
     """The base parameters named in ``base_names`` (a base fit's ``names``, in the model's
     order) followed by every candidate's parameters: the compiled fit's parameter vector."""
-    base = tuple(p for p in base_parameters(face_friction=True) if p.name in set(base_names))
+    base = tuple(p for p in (*base_parameters(face_friction=True), LENGTH_SCALE) if p.name in set(base_names))
     return base + tuple(p for c in CANDIDATES for p in c.parameters)
 
 
