@@ -474,8 +474,6 @@ def _kept(frames, bg):
 def _follow(film, n: int, first, lens, config: TrackerConfig, progress, notes: list, bg=None):
     """Every target through the film: (tracks as found, undistorted centres (n, K, 2) px,
     frames blanked as repeats); ``bg`` (``BackgroundMotion``) keeps each frame on the way."""
-    from video.calibrate import undistort_points
-
     noise = getattr(film, "noise", None)
     noise = None if noise is None or len(noise) != n else np.asarray(noise, float) / 255.0
     # a decoding thread overlaps decoding with tracking; frames in memory need none (the
@@ -483,13 +481,20 @@ def _follow(film, n: int, first, lens, config: TrackerConfig, progress, notes: l
     frames = iter(film) if getattr(film, "in_memory", False) else prefetch(iter(film))
     tt = track_targets(frames if bg is None else _kept(frames, bg), n, first, noise, config, progress)
     dropped = _drop_repeated_frames(tt, getattr(film, "duplicates", ()), notes)
-    uv = tt.uv.copy()
+    return tt, _undistorted(tt.uv, lens), dropped
+
+
+def _undistorted(uv_raw: np.ndarray, lens) -> np.ndarray:
+    """The centres ``uv_raw`` (n, K, 2) px, as recorded, mapped through ``lens`` when it is
+    applied (``lens.corrected``), NaN kept; a new array."""
+    from video.calibrate import undistort_points
+
+    uv = np.array(uv_raw, dtype=float)
     if lens.corrected:
         flat = uv.reshape(-1, 2)
         ok = np.isfinite(flat[:, 0])
         flat[ok] = undistort_points(flat[ok], lens)
-        uv = flat.reshape(uv.shape)
-    return tt, uv, dropped
+    return uv
 
 
 def _camera_map(tt: TargetTracks, uv, lens, est, fps: float, dropped, notes: list):
@@ -498,7 +503,6 @@ def _camera_map(tt: TargetTracks, uv, lens, est, fps: float, dropped, notes: lis
     car, body and hub centres, move together at a constant speed before contact), replacing
     the tapes' map when the fit is made; the centres undistorted again and the tapes' scale
     measured again through it. Returns (lens, centres, scale estimate or None)."""
-    from video.calibrate import undistort_points
     from video.calibrate_motion import map_from_approach
     from video.calibrate_scale import rescaled
     from video.motion import classify_targets
@@ -517,13 +521,9 @@ def _camera_map(tt: TargetTracks, uv, lens, est, fps: float, dropped, notes: lis
     notes.append(fit.note)
     if not fit.used:
         return lens, uv, est
-    uv = tt.uv.copy()
-    flat = uv.reshape(-1, 2)
-    ok = np.isfinite(flat[:, 0])
-    flat[ok] = undistort_points(flat[ok], fit.lens)
     if est is not None:
         est = rescaled(est, fit.lens, fit.k1_sigma, fit.tilt_sigma)
-    return fit.lens, flat.reshape(uv.shape), est
+    return fit.lens, _undistorted(tt.uv, fit.lens), est
 
 
 def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
