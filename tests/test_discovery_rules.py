@@ -818,3 +818,29 @@ def test_residuals_without_a_window_are_not_called_white_noise_when_they_are_cor
     quiet = {"pitch_rad": channels["pitch_rad"]}
     assert _status([], ResidualAnalysis(quiet, {}), ResidualAnalysis(quiet, {})) == \
         "no missing physics: residuals are white noise in all channels"
+
+
+def test_a_misfit_that_ruled_out_candidates_lowered_is_estimated_and_said():
+    """Development films 960007 and 960010: candidates lowered the BIC by 8477 and 3577, each
+    was ruled out (a gap or a depth the data did not fix), the residuals had no window that
+    stood out, and the film was reported as having no missing physics. A misfit a named model
+    lowers that much is left to the missing force's own BIC, and the status says it."""
+    from identify.discover.loop import _status, misfit_left
+    from identify.fitting.residuals import ChannelAnalysis, ResidualAnalysis
+
+    z = np.random.default_rng(6).normal(size=300)
+    white = ResidualAnalysis({"x_m": ChannelAnalysis("x_m", 1.0, float(z @ z), len(z), 0.5, 1.0, ())}, {})
+    ruled_out = [Trial("engine_impact", 0.0, -8476.6, None, {}, False, "where it meets the barrier is not determined"),
+                 Trial("rate_dependence", 0.0, -5.6, None, {}, False, "BIC change -5.6 is not below -10")]
+    assert misfit_left(white, [ruled_out], 10.0)
+    said = _status([], white, white, [ruled_out], 10.0)
+    assert said.startswith("misfit left unnamed: engine_impact lowered the BIC by 8477 but was ruled out (where"), said
+    # candidates that lowered the BIC by less than the gain, or a round that accepted one: nothing left
+    small = [ruled_out[1]]
+    assert not misfit_left(white, [small], 10.0)
+    assert _status([], white, white, [small], 10.0) == "no missing physics: residuals are white noise in all channels"
+    accepted = [dataclasses.replace(ruled_out[0], accepted=True), ruled_out[1]]
+    assert not misfit_left(white, [accepted], 10.0)
+    assert not misfit_left(white, [], 10.0)
+    # residuals that are not white: always left to the estimate
+    assert misfit_left(types.SimpleNamespace(white=False), [accepted], 10.0)
