@@ -553,3 +553,76 @@ def test_the_last_frame_that_shows_the_front_moving_is_neither_unseen_nor_at_the
     # frames already standing at the stop column do not show it moving (a barrier's edge)
     edge = np.where(np.arange(30) >= 5, stop_u, np.nan)
     assert _last_seen_moving(t, rigid, edge, sig, t[15], stop_u) is None
+
+
+def test_a_single_frame_ahead_of_the_car_is_noise_two_in_a_row_are_something_joined():
+    from video.contact_seen import _first_ahead
+
+    t, rigid, seen, _ = _series(ts=0.0204, v=2.3, noise=0.0, n=36)
+    sig = np.full(len(t), 0.3)
+    shaken = seen.copy()
+    shaken[9] += 2.5  # one frame a camera shaken by a few px puts 2.5 px ahead
+    assert _first_ahead(t, rigid, shaken, sig, 1, np.inf) is None
+    joined = shaken.copy()
+    joined[22:24] += 10.0  # debris flung from the face shows ahead in frames 22 and 23
+    assert _first_ahead(t, rigid, joined, sig, 1, np.inf) == pytest.approx(t[22])
+    assert _first_ahead(t, rigid, joined, sig, 1, t[22]) is None  # only frames before the stop count
+
+
+def test_a_front_standing_behind_the_rigid_path_is_told_from_one_going_on_with_the_cell():
+    from video.contact_seen import stands_behind
+
+    t, rigid, seen, sig = _series(ts=0.0204, v=2.3, noise=0.2, n=36)
+    assert stands_behind(t, rigid, seen, sig, 1, t[21])
+    assert not stands_behind(t, rigid, seen, sig, 1, t[10])  # before the stop: on the path
+    assert not stands_behind(t, rigid, rigid + 3.0, sig, 1, t[21])
+
+
+def test_a_contact_hidden_by_debris_is_bracketed_by_the_frames_before_it():
+    from video.contact_seen import joined_bracket
+
+    # the rows stand 1.5 px behind the tip: the tip touches at 20.0 ms, the rows at 20.65 ms
+    # (2.3 px a frame); debris shows ahead from frame 22 on and hides where they stopped
+    t, rigid, seen, _ = _series(ts=0.0200 + 1.5 / 2.3e3, v=2.3, noise=0.0, n=36)
+    sig = np.full(len(t), 0.3)
+    seen[22:] = np.nan
+    t_lo, t_hi, u_last = joined_bracket(t, rigid, seen, sig, 1, t[22], lag_px=1.5)
+    assert u_last == pytest.approx(seen[21])
+    # the rows were last seen at the stop column (frame 21): they reached it no earlier
+    # than the rigid path did, less three sigmas; the tip no later than frame 22
+    assert t_lo == pytest.approx(0.0200 + (1.5 - 0.9) / 2.3e3, abs=1e-6)
+    assert t_hi == pytest.approx(0.0220 + 1.5 / 2.3e3, abs=1e-6)
+    assert t_lo <= 0.0200 + 1.5 / 2.3e3 <= t_hi
+    # the front last seen more than MAX_UNSEEN_FRAMES before the debris: no bracket
+    seen[17:22] = np.nan
+    assert joined_bracket(t, rigid, seen, sig, 1, t[22], lag_px=1.5) is None
+
+
+@pytest.mark.parametrize("stops", ["median rows", "neither"])
+def test_debris_ahead_of_the_car_before_the_median_rows_stop_brackets_the_contact(monkeypatch, stops):
+    # the fragment stands 8 px ahead of the stopped front in every row from frame 21: in
+    # frames 21 and 22 ahead of where the car can be, then both series stop where it
+    # stands (frame 23.6). With the most forward rows showing no clean stop, the rows'
+    # median is followed: its stop is the fragment's, 3.2 ms late; the frames before the
+    # fragment bracket the contact (frame 20 moving, the fragment by frame 21). With no
+    # clean stop in either, the front standing behind the rigid path after the fragment
+    # showed brackets it the same way
+    import video.contact_seen as cs
+
+    calls = []
+
+    def forward_rows_without_stop(*args):
+        calls.append(1)
+        return None if len(calls) == 1 or stops == "neither" else cs.stop_time.__wrapped__(*args)
+
+    forward_rows_without_stop.__wrapped__ = cs.stop_time
+    monkeypatch.setattr(cs, "stop_time", forward_rows_without_stop)
+    frames, pose, nose = _drawn_film(debris_rows=slice(0, 80), bg=np.full((80, 300), 60.0))
+    for i in range(21, len(frames)):  # the fragment 8 px ahead instead of 4.5
+        img = _with_car(np.full((80, 300), 60.0), 179.0 - 8.0, grey=30.0, direction=-1)
+        frames[i] = np.clip(_with_car(img, 179.0, grey=115.0, direction=-1), 0, 255).astype(np.uint8)
+    t = np.arange(len(frames)) / FPS
+    seen = see_contact(frames.__getitem__, t, pose, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert len(calls) == 2 and seen.kind == "seen" and "the middle of a bracket" in seen.note, seen.note
+    assert abs(seen.time_s - 0.0204) <= seen.sigma_s
+    assert seen.sigma_s <= 1.0e-3

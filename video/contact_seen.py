@@ -10,7 +10,11 @@ column where the visible front end stands after the stop (:func:`stop_time`), ta
 the nose's tip where the rows that show the front stand behind it (a rounded nose, a lower
 bumper as grey as the floor: :func:`back_to_the_tip`). Debris flung from the contact
 towards the camera shows beyond the face and joins the front in a few rows: where the rows'
-most forward share stands ahead of where the car can be, their median is followed.
+most forward share stands ahead of where the car can be, their median is followed. Where the
+front followed stood ahead of where the car can be before the stop it shows (or before it
+fell behind the rigid path, with no clean stop), what stopped is not the car's front alone:
+the contact is bracketed by the frames before (:func:`joined_bracket`), its sigma the
+bracket's.
 
 Both are measured in the car's own plane, whatever the barrier's depth. The barrier's edge
 in the picture is not the face: with the camera short of the face, as usual, a barrier side
@@ -77,6 +81,9 @@ FRAMES_AFTER = 6
 #: as something joined to it from this many frames before the stop its most forward rows
 #: show on (which such a fragment, a few px ahead, makes that many frames late)
 JOINED_FRAMES = 3
+#: Seen frames in a row in which the front must stand ahead of where the car can be to
+#: count as something joined to it before its stop (:func:`_first_ahead`)
+AHEAD_FRAMES = 2
 #: A frame further than this many sigmas from the stop model is an outlier ...
 OUTLIER = 3.0
 #: ... and a window with more than this share of outliers is no stop.
@@ -640,14 +647,40 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
             joined = (f"{stood}, and their median shows no clean stop: the stop may be up to "
                       f"{late_s * 1e3:.2f} ms late, which the sigma counts")
     which = ", neither in its most forward rows nor in their median," if joined else ""
-    if found is None:
-        return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "
-                        f"around the deceleration onset, shows no clean stop{which} (too few frames on one side "
-                        "of it, or more than a quarter of them off a stop)")
-    ts, ts_sig, stop_u, gain, reduced = found
-    if gain < MIN_CHI2_GAIN:
-        return not_seen(f"the front end does not stop in frames {i0}-{i1}{which} (chi-square gain {gain:.1f})")
-    moving = _last_seen_moving(t[idx], u_rigid, u_seen, s_seen, ts, stop_u)
+    # the front followed stood ahead of where the car can be before the stop it shows (or,
+    # with no clean stop, before it stood behind the rigid path): what stopped there is not
+    # the car's front alone; the contact is bracketed from the frames before instead
+    stop = found is not None and found[3] >= MIN_CHI2_GAIN
+    t_joined = None
+    if not late_s:
+        t_joined = _first_ahead(t[idx], u_rigid, u_seen, s_seen, d, found[0] if stop else np.inf)
+        if t_joined is not None and not stop and not stands_behind(t[idx], u_rigid, u_seen, s_seen, d, t_joined):
+            t_joined = None
+    if t_joined is None:
+        if found is None:
+            return not_seen(f"the front end, followed in {int(np.isfinite(u_seen).sum())} of {len(idx)} frames "
+                            f"around the deceleration onset, shows no clean stop{which} (too few frames on one "
+                            "side of it, or more than a quarter of them off a stop)")
+        ts, ts_sig, stop_u, gain, reduced = found
+        if gain < MIN_CHI2_GAIN:
+            return not_seen(f"the front end does not stop in frames {i0}-{i1}{which} (chi-square gain {gain:.1f})")
+    else:
+        pre = np.isfinite(lag) & (t[idx] < t_joined) & (t[idx] >= t_joined - FRAMES_BEFORE / fps)
+        lag_px = float(np.median(lag[pre])) if pre.any() and np.median(lag[pre]) > 0.0 else 0.0
+        bracket = joined_bracket(t[idx], u_rigid, u_seen, s_seen, d, t_joined, lag_px)
+        if bracket is None:
+            return not_seen(f"the front end stood ahead of where the car can be from {t_joined * 1e3:.2f} ms on "
+                            "(debris, or something else joined to it), and was not seen within "
+                            f"{MAX_UNSEEN_FRAMES:g} frames before: the contact is not bracketed")
+        t_lo, t_hi, stop_u = bracket
+        ts, ts_sig = 0.5 * (t_lo + t_hi), (t_hi - t_lo) / np.sqrt(12.0)
+        reduced = found[4] if stop else float("nan")
+        after = "before the stop it showed" if stop else "before it stood behind the rigid path, with no clean stop"
+        joined += (f"; from {t_joined * 1e3:.2f} ms on, {after}, the front followed stood ahead of where the car "
+                   f"can be (debris, or something else joined to it): its rows reached the face between "
+                   f"{t_lo * 1e3:.2f} ms (the rigid path at the column they were last seen at) and "
+                   f"{t_hi * 1e3:.2f} ms (the nose's tip at the face by the first frame that showed it)")
+    moving = _last_seen_moving(t[idx], u_rigid, u_seen, s_seen, ts, stop_u) if t_joined is None else ts
     if moving is None or ts - moving > MAX_UNSEEN_FRAMES / fps:
         since = "" if moving is None else f", {(ts - moving) * 1e3:.2f} ms after the last frame that showed it moving"
         return not_seen(f"the front end stops at {ts * 1e3:.2f} ms at column {stop_u:.1f} px{since} with the cell: "
@@ -686,7 +719,9 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     ts_sig = float(np.sqrt(ts_sig**2 + (SEEN_FLOOR_FRAMES / fps) ** 2 + late_s**2))
     off = (f" (the picture's front stood {abs(located):.1f} px {'ahead of' if d * located > 0 else 'behind'} "
            "the vehicle outline's nose)" if abs(located) > NOSE_OFF_PX else "")
-    stopped = f"the front end stopped at {ts * 1e3:.2f} ms at column {stop_u:.1f} px, in the car's own plane{off}"
+    stopped = (f"the front end stopped at {ts * 1e3:.2f} ms at column {stop_u:.1f} px, in the car's own plane{off}"
+               if t_joined is None else f"the front end's rows reached the face at {ts * 1e3:.2f} ms, the middle of "
+               f"a bracket, at column {stop_u:.1f} px or beyond, in the car's own plane{off}")
     if at_edge:
         stopped += (", at an edge of frame 0 beyond the column the depth direction vanishes to (the barrier's "
                     "face in the car's plane)")
@@ -700,8 +735,8 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
                     f"{(ts - tc) * 1e3:.2f} ms earlier")
         ts = tc
     return SeenContact("seen", ts, ts_sig, stop_u, stop_sig,
-                       f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: {stopped}; "
-                       f"reduced chi-square {reduced:.1f}")
+                       f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: {stopped}"
+                       + (f"; reduced chi-square {reduced:.1f}" if np.isfinite(reduced) else ""))
 
 
 def noise_ahead(gray: np.ndarray, background: np.ndarray, u_front: float, rows: np.ndarray, direction: int,
@@ -745,6 +780,93 @@ def _offset_before(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, t_ref
     dt = float(np.median(np.diff(t)))
     pre = np.isfinite(u_seen) & np.isfinite(u_rigid) & (t >= t_ref - FRAMES_BEFORE * dt) & (t < t_ref)
     return float(np.median(u_seen[pre] - u_rigid[pre])) if pre.any() else None
+
+
+def _first_ahead(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+                 direction: int, t_before: float) -> float | None:
+    """The first frame before ``t_before`` (s) from which the seen front end stood ahead of
+    where the car can be in :data:`AHEAD_FRAMES` seen frames in a row, s; None when none did.
+
+    Ahead: beyond the offset the :data:`FRAMES_BEFORE` frames before it show against the
+    rigidly carried front end by more than :data:`OUTLIER` sigmas and a pixel (the car's
+    front never stands ahead of its rigid path: the crush only takes it back). One frame
+    alone is not taken: a camera shaken by a few px puts a frame's front a px or two off
+    (development film 960061, shake 2.3 px: 2.1 px ahead 11 frames before the contact),
+    where debris flung from the face stays in view for several frames (it flies back at
+    most half the car's speed).
+    """
+    seen = np.flatnonzero(np.isfinite(u_seen) & np.isfinite(u_rigid) & np.isfinite(sigma) & (t < t_before))
+    run = 0
+    for k in seen:
+        c = _offset_before(t, u_rigid, u_seen, float(t[k]))
+        ahead = c is not None and direction * (u_seen[k] - u_rigid[k] - c) > OUTLIER * sigma[k] + 1.0
+        run = run + 1 if ahead else 0
+        if run == AHEAD_FRAMES:
+            return float(t[seen[np.flatnonzero(seen == k)[0] - AHEAD_FRAMES + 1]])
+    return None
+
+
+def stands_behind(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+                  direction: int, t_from: float) -> bool:
+    """Whether the seen front end fell behind the rigidly carried one from ``t_from`` (s)
+    on, as a front end stopped at the face does while the cell goes on: in at least
+    :data:`MIN_FRAMES_EACH_SIDE` of the seen frames among the :data:`FRAMES_BEFORE` from
+    ``t_from``, and in at least half of them, by more than :data:`OUTLIER` sigmas and a
+    pixel beyond the offset the frames before ``t_from`` show (px). A front end that goes
+    on with the cell (a frame or two off it, a camera shaken by a few px) does not."""
+    dt = float(np.median(np.diff(t)))
+    c = _offset_before(t, u_rigid, u_seen, t_from)
+    win = np.isfinite(u_seen) & np.isfinite(u_rigid) & np.isfinite(sigma) & (t >= t_from) \
+        & (t < t_from + FRAMES_BEFORE * dt)
+    if c is None or not win.any():
+        return False
+    behind = direction * (u_rigid[win] + c - u_seen[win]) > OUTLIER * sigma[win] + 1.0
+    return bool(behind.sum() >= MIN_FRAMES_EACH_SIDE and behind.mean() >= 0.5)
+
+
+def _rigid_time(t: np.ndarray, u_rigid: np.ndarray, direction: int, column: float) -> float:
+    """When the rigidly carried front end (px, advancing in ``direction``; NaN where not
+    measured) reached ``column`` (px), s: linear between frames, NaN outside them."""
+    ok = np.isfinite(u_rigid)
+    ahead = np.maximum.accumulate(direction * u_rigid[ok])
+    x = direction * column
+    if not ahead[0] <= x <= ahead[-1]:
+        return float("nan")
+    return float(np.interp(x, ahead, t[ok]))
+
+
+def joined_bracket(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
+                   direction: int, t_joined: float, lag_px: float = 0.0) -> tuple[float, float, float] | None:
+    """When the rows followed reached the face, from the frames before something joined
+    the front ahead of where the car can be at ``t_joined`` (s).
+
+    Lower bound: the rows stood at ``u_last`` in the last frame seen before ``t_joined``;
+    moving or stopped there, they had not reached the face before the rigidly carried
+    front end (with the offset the frames before show) came to that column, less
+    :data:`OUTLIER` of that frame's sigmas. Upper bound: what joined the front came with
+    the contact (debris flung from the face), so the nose's tip touched by ``t_joined``;
+    the rows, ``lag_px`` (px) behind the tip, when the rigid path had gone ``lag_px`` on
+    from there.
+
+    Returns
+    -------
+    (t_lo, t_hi, u_last) or None
+        The bracket, s, and the column the rows were last seen at, px; None when the last
+        frame seen lies more than :data:`MAX_UNSEEN_FRAMES` frame intervals before
+        ``t_joined`` or the bracket falls outside the frames followed.
+    """
+    dt = float(np.median(np.diff(t)))
+    ok = np.flatnonzero(np.isfinite(u_seen) & np.isfinite(u_rigid) & np.isfinite(sigma) & (t < t_joined))
+    c = _offset_before(t, u_rigid, u_seen, t_joined)
+    if not len(ok) or c is None or t_joined - t[ok[-1]] > MAX_UNSEEN_FRAMES * dt:
+        return None
+    k = ok[-1]
+    t_lo = _rigid_time(t, u_rigid, direction, u_seen[k] - c - direction * OUTLIER * sigma[k])
+    at_joined = float(np.interp(t_joined, t[np.isfinite(u_rigid)], u_rigid[np.isfinite(u_rigid)]))
+    t_hi = _rigid_time(t, u_rigid, direction, at_joined + direction * lag_px)
+    if not (np.isfinite(t_lo) and np.isfinite(t_hi)) or t_hi <= t_lo:
+        return None
+    return t_lo, t_hi, float(u_seen[k])
 
 
 def _last_moving(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.ndarray,
