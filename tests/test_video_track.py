@@ -22,6 +22,7 @@ from video.motion import (
     block_time,
     classify_targets,
     contact_time,
+    duplicate_tracks,
     impact_speed,
     lift_time,
     rigid_fit,
@@ -363,6 +364,32 @@ def test_classify_separates_fixed_hub_body_and_loose_targets():
     roles = classify_targets(uv, ang)
     assert roles.direction == -1
     assert roles.kind == ("body", "body", "body", "front_hub", "fixed", "other")
+
+
+def test_a_second_track_of_a_fixed_target_is_not_taken_for_a_hub():
+    # a spurious detection in frame 0 midway between two floor targets 17 px apart, lost
+    # in frame 1 and then following one of them (development film 960055): it moved 8 px
+    # and turned 1.5 rad, like a hub behind the rear one, and was taken for the rear hub
+    n = 60
+    t = np.arange(n)
+    uv = np.full((n, 8, 2), np.nan)
+    ang = np.zeros((n, 8))
+    for i in range(n):
+        x = 4.0 * t[i]                                    # moving to the image's right
+        uv[i, :3] = np.array([[300.0, 250.0], [420.0, 280.0], [360.0, 330.0]]) + [x, 0.0]
+        uv[i, 3] = [540.0 + x, 370.0]                     # front hub
+        uv[i, 4] = [205.0 + x, 366.0]                     # rear hub
+        ang[i, 3:5] = 0.05 * t[i]
+        uv[i, 5] = [38.9, 396.3]                          # two floor targets
+        uv[i, 6] = [50.8, 408.6]
+    uv[0, 7], ang[0, 7] = [44.7, 402.3], 0.71             # the spurious one, then a copy of target 5
+    uv[2:, 7], ang[2:, 7] = uv[2:, 5], -0.77
+    roles = classify_targets(uv, ang)
+    assert roles.kind == ("body", "body", "body", "front_hub", "rear_hub", "fixed", "fixed", "other")
+    assert list(duplicate_tracks(uv)) == [False] * 7 + [True]
+    # the copy listed first: still the one that came to the other's target
+    swapped = uv[:, [7, 0, 1, 2, 3, 4, 5, 6]]
+    assert list(duplicate_tracks(swapped)) == [True] + [False] * 7
 
 
 def test_contact_time_and_speed_from_noisy_displacement():

@@ -73,7 +73,8 @@ class Roles:
     ----------
     kind : tuple of str
         Per target: ``"body"``, ``"front_hub"``, ``"rear_hub"``, ``"fixed"`` or
-        ``"other"`` (moves but not rigidly with the body, e.g. on a crushing part).
+        ``"other"`` (moves but not rigidly with the body, e.g. on a crushing part; or a
+        second track of another track's target, :func:`duplicate_tracks`).
     direction : int
         +1 if the car moves to the image's right, -1 to its left.
     body : (B,) int
@@ -96,7 +97,8 @@ def _wrap(a):
 def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0,
                      spin_rad: float = 0.5, rigid_px: float = 0.6,
                      rigid_rel: float = 0.002) -> Roles:
-    """Separate fixed, hub and rigid-body targets from their tracks.
+    """Separate fixed, hub and rigid-body targets from their tracks (a track that follows
+    another's target, :func:`duplicate_tracks`, is none of them: "other").
 
     Parameters
     ----------
@@ -126,11 +128,13 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0
     """
     uv = np.asarray(uv, dtype=float)
     n, K, _ = uv.shape
+    # a second track of another's target is neither fixed, nor a hub, nor on the cell
+    copies = duplicate_tracks(uv)
     med = np.nanmedian(uv, axis=0)
     spread = np.nanmax(np.hypot(*(uv - med).transpose(2, 0, 1)), axis=0)
     seen = np.mean(np.isfinite(uv[:, :, 0]), axis=0)
     # a target seen only briefly (a car target lost early) can move little while it is seen
-    moving = (spread > fixed_px) | (seen < 0.5)
+    moving = ((spread > fixed_px) | (seen < 0.5)) & ~copies
     if not moving.any():
         raise VideoError("no target moves during the film: the car is not tracked; "
                          "check that the film shows the approach and the crash")
@@ -160,7 +164,7 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0
                          "passenger cell needs at least two quadrant targets in view")
     kind = ["other"] * K
     for k in range(K):
-        if not moving[k]:
+        if not moving[k] and not copies[k]:
             kind[k] = "fixed"
     for k in best:
         kind[k] = "body"
@@ -173,6 +177,60 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0
         if len(order) > 1:
             kind[order[-1]] = "rear_hub"
     return Roles(kind=tuple(kind), direction=direction, body=np.array(best, dtype=int))
+
+
+#: Two tracks whose centres stand within this distance of each other, px, in at least
+#: DUPLICATE_SHARE of the frames where both are seen (and DUPLICATE_MIN_FRAMES or more)
+#: follow the same target: quadrant targets are 10 px across or more and never overlap.
+DUPLICATE_PX = 1.0
+DUPLICATE_SHARE = 0.9
+DUPLICATE_MIN_FRAMES = 10
+
+
+def duplicate_tracks(uv: np.ndarray) -> np.ndarray:
+    """Which tracks follow another track's target, (K,) bool.
+
+    A spurious detection in frame 0 (between two fixed targets a few px apart: on
+    development film 960055 one midway between two floor targets 17 px apart) is lost,
+    then taken up by a neighbouring target and followed with it: two tracks of one target.
+    The copy turns and moves from its first place to the target's (8 px and 1.5 rad
+    there), like a hub, and was taken for the rear hub (the wheelbase 1.57 times too long,
+    the film refused). Of two tracks within :data:`DUPLICATE_PX` px of each other in
+    :data:`DUPLICATE_SHARE` of the frames both are seen, the copy is the one that came to
+    the target the other was on: whose own path jumped more (the largest change of its
+    velocity between consecutive seen frames, px per frame, up to the frame after they
+    first coincide; the target's own path is smooth).
+
+    Parameters
+    ----------
+    uv : (n, K, 2) float
+        Target centres per frame, px (NaN where lost).
+    """
+    n, K, _ = uv.shape
+    copies = np.zeros(K, bool)
+    seen = np.isfinite(uv[:, :, 0])
+    first = [int(np.flatnonzero(seen[:, k])[0]) if seen[:, k].any() else -1 for k in range(K)]
+    for i, j in combinations(range(K), 2):
+        both = seen[:, i] & seen[:, j]
+        if both.sum() < DUPLICATE_MIN_FRAMES or copies[i] or copies[j]:
+            continue
+        close = np.hypot(*(uv[both, i] - uv[both, j]).T) <= DUPLICATE_PX
+        if close.mean() < DUPLICATE_SHARE:
+            continue
+        came = int(np.flatnonzero(both)[np.argmax(close)])  # the first frame they coincide
+        jerk = [_largest_jerk(uv[: came + 2, k]) for k in (i, j)]
+        copies[j if jerk[1] >= jerk[0] else i] = True
+    return copies
+
+
+def _largest_jerk(uv: np.ndarray) -> float:
+    """The largest change of a track's velocity between its consecutive seen frames,
+    px per frame (0 with fewer than three seen)."""
+    f = np.flatnonzero(np.isfinite(uv[:, 0]))
+    if len(f) < 3:
+        return 0.0
+    vel = np.diff(uv[f], axis=0) / np.diff(f)[:, None]
+    return float(np.max(np.hypot(*np.diff(vel, axis=0).T)))
 
 
 def _largest_clique(cand: np.ndarray, linked: np.ndarray, exact_up_to: int = 12) -> tuple:

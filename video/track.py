@@ -532,9 +532,12 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
     background's corners (``bg``, a ``video.background_motion.BackgroundMotion``): (roles,
     centres, their sigmas, the correction or None); the hubs are checked afterwards
     (:func:`_rolling_hubs`), then the roles said (:func:`_say_targets`)."""
-    from video.motion import classify_targets, stabilise_on_fixed
+    from video.motion import classify_targets, duplicate_tracks, stabilise_on_fixed
 
     roles = classify_targets(uv, tt.angle)
+    for k in np.flatnonzero(duplicate_tracks(uv)):
+        notes.append(f"target{k} follows the target another track follows (a detection in frame 0 that was not "
+                     "a target, taken up by a neighbouring one): neither fixed, nor a hub, nor on the cell")
     sigma_px = tt.sigma_px
     fixed = np.flatnonzero(np.array(roles.kind) == "fixed")
     # the background only where no fixed target is in view: with one (or more) the fixed
