@@ -18,6 +18,7 @@ from video.contact_seen import (
     noise_ahead,
     not_seen,
     outline_lag_m,
+    pose_on_the_approach,
     raw_points,
     see_contact,
     settle_contact,
@@ -270,6 +271,31 @@ def test_a_blocky_first_frame_does_not_hide_the_stop():
                        guess_s=0.024)
     assert seen.kind == "seen"
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+
+
+def test_a_pose_lost_in_the_backgrounds_frames_is_carried_from_the_approach():
+    # a video's first frames, coded before its rate control settles, can lose every target
+    # (frames 1-2 of development film 960042): the pose there is the approach's straight
+    # line, and the contact is seen as with the pose measured
+    frames, pose, nose = _drawn_film()
+    point = pose.point.copy()
+    point[1:3] = np.nan
+    lost = BodyPose(point=point, point_sigma=pose.point_sigma, phi=pose.phi, phi_sigma=pose.phi_sigma,
+                    rms_px=pose.rms_px, n_targets=pose.n_targets, ref_frame=0)
+    t = np.arange(len(frames)) / FPS
+    carried = pose_on_the_approach(lost, t, 1, 0.015)
+    assert carried.point[1] == pytest.approx(pose.point[1], abs=1e-6)
+    assert np.isnan(carried.point[2, 0]) and np.isnan(lost.point[1, 0])  # the one frame asked, on a copy
+    assert 0 < carried.point_sigma[1] < 0.05
+    seen = see_contact(frames.__getitem__, t, lost, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "seen"
+    assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
+    # no frame of the approach measured before the onset's guess: not seen, and said
+    point[:] = np.nan
+    point[30:] = pose.point[30:]
+    assert pose_on_the_approach(lost, t, 1, 0.015) is None
+    seen = see_contact(frames.__getitem__, t, lost, nose, (20.0, 60.0), -1, guess_s=0.024)
+    assert seen.kind == "not_seen" and "not measured in frame 1" in seen.note
 
 
 def test_settling_the_contact_prefers_the_picture_and_says_a_disagreement():

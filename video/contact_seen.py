@@ -36,7 +36,7 @@ times s on the film's clock (0 at frame 0).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -138,6 +138,12 @@ LOCATE_PX = 40.0
 #: A picture's front further than this from the outline's nose moves the nose the front
 #: end is searched around, and is said in the note, px.
 NOSE_OFF_PX = 2.0
+
+
+#: Frames of the approach whose measured pose carries the car's pose to a frame where it is
+#: not measured (the background's middle frame): the nearest this many, all before the
+#: onset's guess less LEVEL_BEFORE_S (at least 2 of them).
+APPROACH_POSE_FRAMES = 8
 
 
 @dataclass(frozen=True)
@@ -514,7 +520,11 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     j_last = min(BACKGROUND_FRAMES, n) - 1
     j0 = j_last // 2
     if not np.isfinite(pose.point[j0, 0]):
-        return not_seen(f"the car's pose is not measured in frame {j0}, whose picture is part of the background")
+        pose = pose_on_the_approach(pose, t, j0, guess_s - LEVEL_BEFORE_S)
+        if pose is None:
+            return not_seen(f"the car's pose is not measured in frame {j0}, whose picture is part of the "
+                            f"background, nor in {APPROACH_POSE_FRAMES} frames before the onset's guess to "
+                            "carry it there")
     idx = np.arange(i0, i1 + 1)
     # the frames read once, in order (a video is decoded from its start again whenever a
     # frame before the last one read is asked for)
@@ -737,6 +747,51 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
     return SeenContact("seen", ts, ts_sig, stop_u, stop_sig,
                        f"first contact seen at {ts * 1e3:.2f} +- {ts_sig * 1e3:.2f} ms: {stopped}"
                        + (f"; reduced chi-square {reduced:.1f}" if np.isfinite(reduced) else ""))
+
+
+def pose_on_the_approach(pose: BodyPose, t: np.ndarray, j: int, before_s: float) -> BodyPose | None:
+    """``pose`` with frame ``j``'s pose, not measured there, carried from the approach.
+
+    Before contact the passenger cell moves in a uniform translation (the car rolls at a
+    constant speed, level): its point in frame ``j`` is the straight line (px against s)
+    fitted by least squares to the :data:`APPROACH_POSE_FRAMES` measured frames nearest
+    ``j`` among those before ``before_s`` (s, film clock), and its rotation their median
+    (rad). A video's first frames, coded before its rate control settles, can lose every
+    target (development film 960042, 0.02 bit per pixel: frames 1-2), where the picture
+    still serves as background.
+
+    Parameters
+    ----------
+    pose : BodyPose
+        The cell's pose per frame, px (NaN where not measured).
+    t : (n,) s
+        Film clock of every frame.
+    j : int
+        The frame to carry the pose to.
+    before_s : float
+        Only frames before this time are the approach, s.
+
+    Returns
+    -------
+    BodyPose or None
+        A copy with frame ``j``'s point, rotation and their sigmas filled in (the sigma the
+        fit's at ``t[j]``, px, and the frames' median, rad); None with fewer than 2
+        measured frames of the approach.
+    """
+    ok = np.flatnonzero(np.isfinite(pose.point[:, 0]) & np.isfinite(pose.phi) & (t < before_s))
+    if len(ok) < 2:
+        return None
+    near = np.sort(ok[np.argsort(np.abs(ok - j), kind="stable")[:APPROACH_POSE_FRAMES]])
+    tt = t[near] - t[j]
+    A = np.stack([np.ones_like(tt), tt], axis=1)
+    coef, *_ = np.linalg.lstsq(A, pose.point[near], rcond=None)
+    point, phi = pose.point.copy(), pose.phi.copy()
+    point_sigma, phi_sigma = pose.point_sigma.copy(), pose.phi_sigma.copy()
+    point[j], phi[j] = coef[0], float(np.median(pose.phi[near]))
+    # the line's sigma at t[j] from the frames' own sigma (the intercept's, t[j] at 0)
+    cov = np.linalg.pinv(A.T @ A) * float(np.nanmedian(pose.point_sigma[near])) ** 2
+    point_sigma[j], phi_sigma[j] = float(np.sqrt(cov[0, 0])), float(np.nanmedian(pose.phi_sigma[near]))
+    return replace(pose, point=point, phi=phi, point_sigma=point_sigma, phi_sigma=phi_sigma)
 
 
 def noise_ahead(gray: np.ndarray, background: np.ndarray, u_front: float, rows: np.ndarray, direction: int,
