@@ -159,3 +159,37 @@ def test_the_background_measured_as_frames_come_is_measured_as_when_kept(monkeyp
         measured[name] = bg.stabilise(uv, sigma)
     np.testing.assert_allclose(measured["kept"].shift_px, measured["as they come"].shift_px)
     np.testing.assert_allclose(measured["kept"].shift_px[17:], np.array(shifts[17:]), atol=0.1)
+
+
+def _turned(points, c, f, pan, tilt, roll):
+    """Where a pinhole camera (focal ``f`` px, principal point ``c``) turned by ``pan``,
+    ``tilt`` and ``roll`` rad sees the image points ``points`` (M, 2) px of the unturned one."""
+    ca, sa, cb, sb, cg, sg = np.cos(pan), np.sin(pan), np.cos(tilt), np.sin(tilt), np.cos(roll), np.sin(roll)
+    R = (np.array([[cg, -sg, 0], [sg, cg, 0], [0, 0, 1]]) @ np.array([[1, 0, 0], [0, cb, -sb], [0, sb, cb]])
+         @ np.array([[ca, 0, sa], [0, 1, 0], [-sa, 0, ca]]))
+    rays = np.column_stack([np.asarray(points, float) - c, np.full(len(points), f)]) @ R.T
+    return c + f * rays[:, :2] / rays[:, 2:]
+
+
+def test_a_wide_lens_cameras_turn_is_taken_out_as_a_turn():
+    # a camera of 640 px focal length turned by a decaying shake of up to 5 px: two barrier
+    # targets 470 px left of the axis move a quarter more than a car near the middle
+    # (development film 960044), which a shift and roll measured on them overshoots
+    n, f, c = 90, 640.0, np.array([512.0, 384.0])
+    t = np.arange(n)
+    fixed = np.array([[42.0, 300.0], [45.0, 420.0], [712.0, 600.0]])
+    body = np.array([[300.0, 330.0], [420.0, 360.0], [360.0, 420.0]])
+    env = np.where(t >= 30, np.exp(-(t - 30) / 30.0), 0.0)
+    pan, tilt, roll = 5.0 / f * env * np.sin(0.15 * t), 1.5 / f * env * np.cos(0.2 * t), 0.002 * env * np.sin(0.1 * t)
+    still = np.stack([np.vstack([body + [2.0 * i, 0.0], fixed]) for i in t])
+    shaken = np.stack([_turned(still[i], c, f, pan[i], tilt[i], roll[i]) for i in t])
+    sigma = np.full(shaken.shape[:2], 0.03)
+    got = stabilise_on_fixed(shaken, sigma, np.array([3, 4, 5]), principal_px=c)
+    assert got.turn is not None and got.turn.focal_px == pytest.approx(f, rel=0.05)
+    assert np.abs(got.uv[:, :3] - still[:, :3]).max() < 0.05
+    # as a shift and roll (no principal point) the car is a px off at the shake's peak
+    rigid = stabilise_on_fixed(shaken, sigma, np.array([3, 4, 5]))
+    assert rigid.turn is None and np.abs(rigid.uv[:, :3] - still[:, :3]).max() > 0.5
+    # a long lens: the turn is a shift and roll, which stands
+    long_lens = np.stack([_turned(still[i], c, 1e5, pan[i] * f / 1e5, tilt[i] * f / 1e5, roll[i]) for i in t])
+    assert stabilise_on_fixed(long_lens, sigma, np.array([3, 4, 5]), principal_px=c).turn is None

@@ -526,12 +526,14 @@ def _camera_map(tt: TargetTracks, uv, lens, est, fps: float, dropped, notes: lis
     return fit.lens, _undistorted(tt.uv, fit.lens), est
 
 
-def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
+def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None, principal_px=None):
     """Fixed, hub and body targets (``video.motion.classify_targets``) and the camera's
     shake taken out, measured on the fixed targets or, with none in view, on the
     background's corners (``bg``, a ``video.background_motion.BackgroundMotion``): (roles,
     centres, their sigmas, the correction or None); the hubs are checked afterwards
-    (:func:`_rolling_hubs`), then the roles said (:func:`_say_targets`)."""
+    (:func:`_rolling_hubs`), then the roles said (:func:`_say_targets`). With the lens's
+    centre ``principal_px`` (px) the fixed targets' motion is taken out as the camera's turn
+    where they tell it from a shift and roll (``video.motion.fit_camera_turn``)."""
     from video.motion import classify_targets, duplicate_tracks, stabilise_on_fixed
 
     roles = classify_targets(uv, tt.angle)
@@ -548,7 +550,7 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
     if len(fixed):
         if bg is not None:
             bg.kept.clear()  # the fixed targets measure the shake: the background's frames are let go
-        stab, source, lost = (stabilise_on_fixed(uv, sigma_px, fixed), f"{len(fixed)} fixed target(s)",
+        stab, source, lost = (stabilise_on_fixed(uv, sigma_px, fixed, principal_px), f"{len(fixed)} fixed target(s)",
                               "where no fixed target is seen")
     elif bg is not None:
         stab, source, lost = (bg.stabilise(uv, sigma_px), f"{len(bg.ref)} corners of the background",
@@ -566,7 +568,9 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None):
     notes.append(f"camera motion taken out of every track from {source}: up to "
                  f"{np.hypot(*stab.shift_px[worst]):.2f} px (frame {worst}), roll up to "
                  f"{np.degrees(np.max(np.abs(stab.roll))):.3f} deg"
-                 + (f"; not corrected in frame(s) {_runs_text(unseen)}, {lost}" if len(unseen) else ""))
+                 + (f"; not corrected in frame(s) {_runs_text(unseen)}, {lost}" if len(unseen) else "")
+                 + (f"; as the camera's turn, the focal length fitted to their motion {stab.turn.focal_px:.0f} px"
+                    if stab.turn is not None else ""))
     return roles, stab.uv, stab.sigma_px, stab
 
 
@@ -817,7 +821,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     tt, uv, dropped = _follow(film, n, first, lens, config, progress, notes, bg)
     if config.map_from_approach:
         lens, uv, est = _camera_map(tt, uv, lens, est, fps, dropped, notes)
-    roles, uv, sigma_px, stab = _roles(uv, tt, config, notes, bg)
+    roles, uv, sigma_px, stab = _roles(uv, tt, config, notes, bg, lens.centre)
     d = roles.direction
     ref = _reference(uv, roles.body)
     try:
