@@ -465,6 +465,12 @@ def stabilise_on_fixed(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray,
 #: Focal lengths tried for a camera's turn, as multiples of twice the principal point's
 #: column (the picture's width): from a wide lens to a long one.
 TURN_FOCAL_WIDTHS = np.geomspace(0.2, 20.0, 121)
+#: How far apart (px) the turn's growth off the axis must move the fixed targets at the
+#: largest shake for the turn to be told: on development film 960059 two floor targets 24 px
+#: apart, 300 px off the axis, moved 0.03 px apart (f = 782 px, 1.5 px of shake), which the
+#: tracking's own errors of a few hundredths of a px took for f = 505 px (x RMS 0.59 -> 1.13
+#: mm); on 960044 the barrier and floor targets moved 2.6 px apart (f fitted 577, true 643).
+MIN_TURN_SPREAD_PX = 0.5
 #: How much better (chi-square, scaled by the best fit's reduced chi-square when above 1) the
 #: turn of a camera of finite focal length must explain the fixed targets' motion than a
 #: shift and roll (its long-lens limit) to be taken.
@@ -534,6 +540,12 @@ def fit_camera_turn(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray, ref
     rigid, m = chi2(np.inf)
     gain = rigid - scores[k]
     if not gain > MIN_TURN_GAIN * max(1.0, scores[k] / max(m, 1)):
+        return None
+    # the turn shows only between fixed targets at different distances from the axis: their
+    # spread of (x^2 + y^2) / f^2 times the largest shake is how far apart it moves them
+    r2 = np.sum((ref[np.all(np.isfinite(ref), axis=1)] - c) ** 2, axis=1) / float(focal[k]) ** 2
+    shake = float(np.max(np.hypot(b[:, 0::2], b[:, 1::2]) * (w[:, 0::2] > 0)))
+    if (r2.max() - r2.min()) * shake < MIN_TURN_SPREAD_PX:
         return None
     f = float(focal[k])
     if 0 < k < len(focal) - 1:  # between the grid's steps (4 %): the parabola through the best three, in log f
