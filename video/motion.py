@@ -206,10 +206,9 @@ def duplicate_tracks(uv: np.ndarray) -> np.ndarray:
     uv : (n, K, 2) float
         Target centres per frame, px (NaN where lost).
     """
-    n, K, _ = uv.shape
+    K = uv.shape[1]
     copies = np.zeros(K, bool)
     seen = np.isfinite(uv[:, :, 0])
-    first = [int(np.flatnonzero(seen[:, k])[0]) if seen[:, k].any() else -1 for k in range(K)]
     for i, j in combinations(range(K), 2):
         both = seen[:, i] & seen[:, j]
         if both.sum() < DUPLICATE_MIN_FRAMES or copies[i] or copies[j]:
@@ -529,15 +528,16 @@ def fit_camera_turn(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray, ref
     m = int(2 * seen[frames].sum() - 3 * len(frames))
 
     def chi2(f):
+        """The chi-square of every frame's best pan, tilt and roll at focal length ``f`` px."""
         A = np.nan_to_num(turn_field(ref - c, f).reshape(-1, 3))[None] * w[:, :, None]
         coef = np.einsum("nij,nj->ni", np.linalg.pinv(np.einsum("nri,nrj->nij", A, A)),
                          np.einsum("nri,nr->ni", A, b * w))
-        return float(np.sum((np.einsum("nri,ni->nr", A, coef) - b * w) ** 2)), m
+        return float(np.sum((np.einsum("nri,ni->nr", A, coef) - b * w) ** 2))
 
     focal = TURN_FOCAL_WIDTHS * 2.0 * max(float(c[0]), 1.0)
-    scores = [chi2(f)[0] for f in focal]
+    scores = [chi2(f) for f in focal]
     k = int(np.argmin(scores))
-    rigid, m = chi2(np.inf)
+    rigid = chi2(np.inf)
     gain = rigid - scores[k]
     if not gain > MIN_TURN_GAIN * max(1.0, scores[k] / max(m, 1)):
         return None
@@ -556,9 +556,9 @@ def fit_camera_turn(uv: np.ndarray, sigma_px: np.ndarray, fixed: np.ndarray, ref
             f *= float(np.exp(0.5 * step * (y0 - y2) / curve))
     angles = np.full((len(uv), 3), np.nan)
     for i in np.flatnonzero(seen.sum(axis=1) >= 1):
-        A, b, w = _turn_rows(uv[i, fixed], sigma_px[i, fixed], ref, seen[i], c, f)
+        A_i, b_i, w_i = _turn_rows(uv[i, fixed], sigma_px[i, fixed], ref, seen[i], c, f)
         free = slice(0, 3) if seen[i].sum() >= 2 else slice(0, 2)  # one target: no roll
-        coef, *_ = np.linalg.lstsq(A[:, free] * w[:, None], b * w, rcond=None)
+        coef, *_ = np.linalg.lstsq(A_i[:, free] * w_i[:, None], b_i * w_i, rcond=None)
         angles[i] = 0.0
         angles[i, free] = coef
     return CameraTurn(focal_px=f, principal_px=c, angles=angles)
