@@ -117,7 +117,7 @@ def test_force_height_not_identified_from_compression_alone_without_pitch(a4, pa
 
 
 def test_autocorrelation_time_is_one_for_white_noise_and_grows_with_correlation():
-    from identify.fitting.least_squares import integrated_autocorrelation_time
+    from video.filters import integrated_autocorrelation_time
 
     rng = np.random.default_rng(3)
     white = rng.normal(size=2000)

@@ -208,3 +208,41 @@ def test_fixed_targets_too_close_together_to_show_the_turn_keep_the_shift_and_ro
     shaken = np.stack([_turned(still[i], c, f, pan[i], tilt[i], 0.0) for i in t])
     got = stabilise_on_fixed(shaken, np.full(shaken.shape[:2], 0.01), np.array([2, 3]), principal_px=c)
     assert got is not None and got.turn is None
+
+
+def test_tracking_errors_alike_over_frames_do_not_buy_a_turn():
+    # development film 960032: the fixed targets' tracking errors, alike from frame to frame,
+    # were taken for a camera of f = 331 px (true 575) by a chi-square of 125 over 490
+    # frames, and the contact was seen 3.4 ms early. Here a camera shaken by a shift (a long
+    # lens), the two barrier targets' centres off by a slow drift and a little of the shake's
+    # own shape (debris over them): counted frame by frame the turn of a wide lens fits them
+    # far better than a shift and roll; counted with the residuals' correlation time it does not
+    n, c = 300, np.array([400.0, 300.0])
+    t = np.arange(n)
+    fixed = np.array([[25.0, 300.0], [28.0, 340.0], [200.0, 320.0]])
+    body = np.array([[300.0, 330.0], [420.0, 360.0], [360.0, 420.0]])
+    env = np.where(t >= 30, np.exp(-(t - 30) / 60.0), 0.0)
+    pan, tilt = 2.0 / 1e5 * env * np.sin(0.15 * t), 1.0 / 1e5 * env * np.cos(0.2 * t)
+    still = np.stack([np.vstack([body + [2.0 * i, 0.0], fixed]) for i in t])
+    slow = np.where(t >= 30, np.sin(np.pi * np.clip((t - 30) / 200.0, 0, 1)), 0.0)
+    for seed in range(3):
+        shaken = np.stack([_turned(still[i], c, 1e5, pan[i], tilt[i], 0.0) for i in t])
+        shaken += np.random.default_rng(seed).normal(size=shaken.shape) * 0.03
+        shaken[:, 3:5, 0] += (0.25 * env * np.sin(0.15 * t) + 0.4 * slow)[:, None]
+        got = stabilise_on_fixed(shaken, np.full((n, 6), 0.03), np.array([3, 4, 5]), principal_px=c)
+        assert got is not None and got.turn is None, got.turn.focal_px
+
+
+def test_the_correlation_time_of_white_and_of_alike_errors():
+    from video.motion import _frames_correlation_time
+
+    rng = np.random.default_rng(4)
+    white = rng.normal(size=(2000, 2))
+    alike = np.zeros((2000, 2))
+    for i in range(1, 2000):  # AR(1) of 0.9: tau = 1.9 / 0.1 = 19
+        alike[i] = 0.9 * alike[i - 1] + rng.normal(size=2)
+    seen = np.ones((2000, 2), bool)
+    assert _frames_correlation_time(white, seen) == pytest.approx(1.0, abs=0.2)
+    assert _frames_correlation_time(alike, seen) == pytest.approx(19.0, rel=0.25)
+    seen[5:, 1] = False  # a column seen in fewer than 10 frames does not count
+    assert _frames_correlation_time(alike, seen) == pytest.approx(_frames_correlation_time(alike[:, :1], seen[:, :1]))

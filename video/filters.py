@@ -1,4 +1,5 @@
-"""SAE J211-1 / ISO 6487 channel-frequency-class (CFC) filters.
+"""SAE J211-1 / ISO 6487 channel-frequency-class (CFC) filters, and the correlation time of a
+series' errors (:func:`integrated_autocorrelation_time`).
 
 J211's digital filter (its Appendix C) is a 2-pole Butterworth low-pass run forward and
 then backward over the data, which makes a 4-pole filter with zero phase:
@@ -233,3 +234,25 @@ def velocity(x_m: np.ndarray, fs: float, cfc: int = 180,
     """
     v, s = _apply(x_m, sigma_m, fs, cfc, derivative=True)
     return Filtered(values=v, sigma=s, cfc=cfc, fs=float(fs), quantity="velocity")
+
+
+def integrated_autocorrelation_time(residual: np.ndarray, max_lag: int = 50) -> float:
+    """tau = 1 + 2 * sum of the residual's autocorrelations, summed over lags while the
+    sums of neighbouring pairs stay positive (Geyer's initial positive sequence); 1 for
+    white noise, larger when neighbouring samples' errors are alike (an AR(1) process of
+    coefficient phi has tau = (1 + phi) / (1 - phi)). Never below 1. n correlated samples
+    carry the information of n / tau independent ones: a chi-square summed over them is
+    divided by it (the fit's channels, a camera's turn told from its shift)."""
+    r = np.asarray(residual, float)
+    r = r - r.mean()
+    n, var = len(r), float(r @ r)
+    if n < 10 or var <= 0:
+        return 1.0
+    rho = [float(r[:-k] @ r[k:]) / var for k in range(1, min(max_lag, n // 4) + 1)]
+    total = 0.0
+    for k in range(0, len(rho) - 1, 2):
+        pair = rho[k] + rho[k + 1]
+        if pair <= 0:
+            break
+        total += pair
+    return max(1.0, 1.0 + 2.0 * total)

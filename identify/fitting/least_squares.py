@@ -16,6 +16,8 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
+from video.filters import integrated_autocorrelation_time
+
 
 def weighted_offset(diff, w):
     """The constant c that minimises sum(w^2 (diff - c)^2): the w^2-weighted mean of diff
@@ -38,26 +40,6 @@ def channel_residuals(pred, y, w, offset_free: bool):
 def prior_residuals(values, mu, w):
     """Residual rows of priors: (value - mu) / sigma, given as w = 1/sigma (0: no prior)."""
     return (values - mu) * w
-
-
-def integrated_autocorrelation_time(residual: np.ndarray, max_lag: int = 50) -> float:
-    """tau = 1 + 2 * sum of the residual's autocorrelations, summed over lags while the
-    sums of neighbouring pairs stay positive (Geyer's initial positive sequence); 1 for
-    white noise, larger when neighbouring samples' errors are alike (an AR(1) process of
-    coefficient phi has tau = (1 + phi) / (1 - phi)). Never below 1."""
-    r = np.asarray(residual, float)
-    r = r - r.mean()
-    n, var = len(r), float(r @ r)
-    if n < 10 or var <= 0:
-        return 1.0
-    rho = [float(r[:-k] @ r[k:]) / var for k in range(1, min(max_lag, n // 4) + 1)]
-    total = 0.0
-    for k in range(0, len(rho) - 1, 2):
-        pair = rho[k] + rho[k + 1]
-        if pair <= 0:
-            break
-        total += pair
-    return max(1.0, 1.0 + 2.0 * total)
 
 
 def channel_variance_factors(r, channel_rows: dict, n_params: int, tau_at_least: dict | None = None) -> tuple[dict, dict]:

@@ -28,7 +28,7 @@ import math
 import numpy as np
 from scipy import stats
 
-from identify.fitting.least_squares import integrated_autocorrelation_time
+from video.filters import integrated_autocorrelation_time
 
 PHASES = ("approach", "compression", "restitution", "after separation")
 #: Ljung-Box p-value below which a channel's residuals are said not to be white noise.
