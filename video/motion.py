@@ -80,11 +80,14 @@ class Roles:
         +1 if the car moves to the image's right, -1 to its left.
     body : (B,) int
         Indices of the body targets.
+    copies : tuple of int
+        Indices of the tracks that follow another track's target (:func:`duplicate_tracks`).
     """
 
     kind: tuple
     direction: int
     body: np.ndarray
+    copies: tuple = ()
 
     def index(self, kind: str) -> int | None:
         """Index of the (first) target of ``kind``, or None."""
@@ -177,7 +180,8 @@ def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0
         kind[order[0]] = "front_hub"
         if len(order) > 1:
             kind[order[-1]] = "rear_hub"
-    return Roles(kind=tuple(kind), direction=direction, body=np.array(best, dtype=int))
+    return Roles(kind=tuple(kind), direction=direction, body=np.array(best, dtype=int),
+                 copies=tuple(int(k) for k in np.flatnonzero(copies)))
 
 
 #: Two tracks whose centres stand within this distance of each other, px, in at least

@@ -534,10 +534,10 @@ def _roles(uv, tt: TargetTracks, config: TrackerConfig, notes: list, bg=None, pr
     (:func:`_rolling_hubs`), then the roles said (:func:`_say_targets`). With the lens's
     centre ``principal_px`` (px) the fixed targets' motion is taken out as the camera's turn
     where they tell it from a shift and roll (``video.motion.fit_camera_turn``)."""
-    from video.motion import classify_targets, duplicate_tracks, stabilise_on_fixed
+    from video.motion import classify_targets, stabilise_on_fixed
 
     roles = classify_targets(uv, tt.angle)
-    for k in np.flatnonzero(duplicate_tracks(uv)):
+    for k in roles.copies:
         notes.append(f"target{k} follows the target another track follows (a detection in frame 0 that was not "
                      "a target, taken up by a neighbouring one): neither fixed, nor a hub, nor on the cell")
     sigma_px = tt.sigma_px
