@@ -94,10 +94,6 @@ class Roles:
         return self.kind.index(kind) if kind in self.kind else None
 
 
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
 def classify_targets(uv: np.ndarray, angle: np.ndarray, *, fixed_px: float = 8.0,
                      spin_rad: float = 0.5, rigid_px: float = 0.6,
                      rigid_rel: float = 0.002) -> Roles:
