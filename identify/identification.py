@@ -451,7 +451,7 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         doc["fit"]["starts_of"] = "base model"
     if engine_doubt:
         warnings.append(engine_doubt)
-    warnings += fit_warnings(fr)
+    warnings += unconverged_warning(base) + fit_warnings(fr)
     if warnings:
         doc["warnings"] = list(warnings)
     ident = Identification(document=doc, fit=fr, recording=rec, vehicle=veh, discovery=found, one_body=one_body)
@@ -460,6 +460,17 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
         default_traj = simulate(named_params("vsim_default"), veh, fr.speed, duration=float(fr.measurement.t.max()) + 0.001)
         ident.out = write_results(folder, ident, default_traj)
     return ident
+
+
+def unconverged_warning(base) -> list[str]:
+    """The base model's fit ``base`` where the solver stopped at its step limit before its
+    tolerances were met, taken as the best fit because its starts agree on it
+    (``identify.discover.loop.fit_base``, which refuses it otherwise): one warning, or none."""
+    if base.converged:
+        return []
+    return [f"the base model's fit stopped at the solver's step limit, its tolerances not met; {base.starts_at_best}"
+            f" of {base.starts} starting points ended at this misfit (reduced chi-square {base.reduced_chi2:.3g}),"
+            " taken as the best fit: its numbers carry that misfit in their uncertainty"]
 
 
 def fit_warnings(fr) -> list[str]:

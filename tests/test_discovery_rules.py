@@ -844,3 +844,42 @@ def test_a_misfit_that_ruled_out_candidates_lowered_is_estimated_and_said():
     assert not misfit_left(white, [], 10.0)
     # residuals that are not white: always left to the estimate
     assert misfit_left(types.SimpleNamespace(white=False), [accepted], 10.0)
+
+
+@dataclasses.dataclass
+class _Search:
+    """What :func:`identify.discover.loop.fit_base` reads of a fit."""
+
+    converged: bool
+    reduced_chi2: float
+    chi2: float
+    starts: int
+    starts_at_best: int
+    other_minima: list
+    values: dict
+
+
+@pytest.mark.parametrize("agreeing, refused", [(5, False), (1, True)])
+def test_an_unflagged_fit_is_the_models_misfit_when_its_starts_agree(monkeypatch, a4, agreeing, refused):
+    # clean calibration world 950005: five starts ended at one misfit (reduced chi-square 354)
+    # that the solver never flagged converged; a start at the truth converged there
+    from identify.discover import loop
+    from identify.errors import UserError
+    from identify.identification import unconverged_warning
+
+    def stalled(measurement, vehicle, options, **kw):
+        return _Search(False, 354.0, 1.9e5, options.starts, agreeing if options.starts > 1 else 1, [], {})
+
+    monkeypatch.setattr(loop, "fit", stalled)
+    monkeypatch.setattr(loop, "_final", lambda fr, measured: fr)
+    t = np.linspace(-0.01, 0.1, 111)
+    m = Measurement(t=t, channels={"x_m": 15.0 * t}, sigma={"x_m": np.full(len(t), 3e-4)}, source="film")
+    if refused:
+        with pytest.raises(UserError, match="did not converge"):
+            loop.fit_base(m, a4)
+        return
+    base = loop.fit_base(m, a4)
+    assert (base.starts, base.starts_at_best) == (5, 5)
+    [warning] = unconverged_warning(base)
+    assert "5 of 5 starting points ended at this misfit (reduced chi-square 354)" in warning
+    assert unconverged_warning(dataclasses.replace(base, converged=True)) == []

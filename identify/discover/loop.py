@@ -208,7 +208,14 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
                                              options=dataclasses.replace(options, starts=1), **kwargs), this, 5)
         if fr is None or this.chi2 < fr.chi2:
             fr, found_by = this, i
-    if not fr.converged and fr.reduced_chi2 > 100:
+    # a misfit far beyond the noise where the solver stopped at its step limit is the search's
+    # failure only when no two starts agree on it; where they do, it is the model's misfit and
+    # the fit goes on, warned of (``identify.identification.fit_warnings``): clean calibration
+    # world 950005 was refused as "did not converge" (reduced chi-square 354) though its five
+    # starts ended at one misfit, where a start at the world's truth converged (k_compression
+    # 1.2787e6 against 1.2795e6); fitted, it gave the speed within 0.05 %, the restitution and
+    # dz_contact within their sigmas, k_compression not identified, and no discovery
+    if not fr.converged and fr.reduced_chi2 > 100 and multi.starts_at_best < MIN_STARTS_AGREEING:
         raise UserError(
             f"{measurement.source}: the fit did not converge (reduced chi-square {fr.reduced_chi2:.3g});"
             " check the vehicle, the speed and the tracks"
@@ -223,6 +230,11 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
     fr = dataclasses.replace(fr, starts=multi.starts + len(guesses) - 1, other_minima=multi.other_minima,
                              starts_at_best=multi.starts_at_best if found_by == 0 else 1)
     return _final(fr, measured)
+
+
+#: Starts that must end at one misfit (``FitResult.starts_at_best``) for a fit the solver did not
+#: flag converged to be taken as the minimum (:func:`fit_base`).
+MIN_STARTS_AGREEING = 2
 
 
 def continued(fit_from, fr: FitResult, times: int) -> FitResult:
