@@ -298,13 +298,17 @@ def test_a_pose_lost_in_the_backgrounds_frames_is_carried_from_the_approach():
     assert seen.kind == "not_seen" and "not measured in frame 1" in seen.note
 
 
-def test_settling_the_contact_prefers_the_picture_and_says_a_disagreement():
+def test_settling_the_contact_prefers_the_picture_unless_the_motion_disagrees():
     seen = SeenContact("seen", 0.0200, 0.0005, 100.0, 0.2, "first contact seen at 20.00 +- 0.50 ms")
     tc, sig, note = settle_contact(0.0210, seen)
     assert (tc, sig) == (0.0200, 0.0005) and "disagree" not in note
+    near = 0.0200 + 2.8 * np.hypot(0.0005, ONSET_SIGMA_S)
+    tc, sig, note = settle_contact(near, seen)
+    assert (tc, sig) == (0.0200, 0.0005) and "disagree" not in note
+    # development film 960042: a stop seen 21 ms before the onset is no measurement of the contact
     late = 0.0200 + 3.2 * np.hypot(0.0005, ONSET_SIGMA_S)
     tc, sig, note = settle_contact(late, seen)
-    assert tc == 0.0200 and "disagree" in note
+    assert (tc, sig) == (late, None) and "disagree" in note and "no sigma" in note
     tc, sig, note = settle_contact(0.0210, not_seen("too dark"))
     assert (tc, sig) == (0.0210, None) and "onset alone" in note
 
