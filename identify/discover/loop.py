@@ -210,7 +210,7 @@ def fit_base(measurement, vehicle, free=None, options: FitOptions = dataclasses.
             fr, found_by = this, i
     # a misfit far beyond the noise where the solver stopped at its step limit is the search's
     # failure only when no two starts agree on it; where they do, it is the model's misfit and
-    # the fit goes on, warned of (``identify.identification.fit_warnings``): clean calibration
+    # the fit goes on, warned of (``identify.identification.unconverged_warning``): clean calibration
     # world 950005 was refused as "did not converge" (reduced chi-square 354) though its five
     # starts ended at one misfit, where a start at the world's truth converged (k_compression
     # 1.2787e6 against 1.2795e6); fitted, it gave the speed within 0.05 %, the restitution and
