@@ -23,8 +23,8 @@ import pytest
 
 from identify.discover.candidates import BY_EFFECT, neutral_values
 from identify.discover.loop import (Alternative, Trial, _alternatives_reason, _held_out_chi2, _plausible,
-                                   alternatives_shift, bic, choose, round_tau, score, shape_check, widened_by_choice,
-                                   with_model_choice)
+                                   alternatives_shift, bic, by_own_misfit, choose, own_misfit_check, round_tau, score, shape_check,
+                                   widened_by_choice, with_model_choice)
 from identify.discover.candidates.front_wheel_block import front_wheels_blocked
 from identify.fitting.collision_fit import FitResult
 from identify.recordings.measurement import Measurement
@@ -111,6 +111,8 @@ class FakeFit:
     chi2: float = 0.0
     std_data: dict = dataclasses.field(default_factory=dict)
     held_measured: dict = dataclasses.field(default_factory=dict)
+    std_model: dict = dataclasses.field(default_factory=dict)
+    std_data_by_channel: dict = dataclasses.field(default_factory=dict)
     PULL_CONFLICT = FitResult.PULL_CONFLICT
     pulls = FitResult.pulls
 
@@ -288,6 +290,66 @@ def test_an_implausible_fit_is_refused_with_its_reason(a4, neutral, effect, over
         assert abs(110e3 - neutral["rear_axle_lift.rear_axle_stiffness"]) < 3 * 10e3
     why = _plausible(effect, candidate_fit(values, std, engine_force_max=1e5), a4)
     assert words in why and why[0].islower() and (why[-1].islower() or why[-1] == ")"), why  # nothing around it
+
+
+@pytest.mark.parametrize("effect, over, wide, words", [
+    # development films, the candidate fit's std widened as a whole by the reduced chi-square
+    # (960014: 0.082 +- 0.16 s/m; 960007: gap std 1.22 m; 960010: depth std 2.4 m); the stds
+    # by own misfit here are made up, within what the rules accept and beyond
+    ("rate_dependence", {"rate_coefficient": (0.082, 0.01)}, 0.16, "does not differ from 0"),
+    ("engine_impact", {"gap": (0.35, 0.03)}, 1.22, "gap std 1.220 m"),
+    ("stiffness_zone", {"depth": (0.40, 0.02)}, 2.4, "depth is not determined (std 2.400 m)"),
+])
+def test_determinacy_is_judged_with_each_channel_widened_by_its_own_misfit(a4, effect, over, wide, words):
+    """A parameter the fit's covariance, widened as a whole by the reduced chi-square (the
+    heave's misfit), leaves undetermined is determined when each channel is widened by its own
+    misfit (``FitResult.std_data_by_channel``), and is judged by that; one that channel by
+    channel is still spread as widely is refused for it."""
+    values, std = changed(effect, **over)
+    name = f"{effect}.{next(iter(over))}"
+    own = dict(std)
+    wide_std = {**std, name: wide}
+
+    def fit_with(by_channel):
+        fr = candidate_fit(values, wide_std, engine_force_max=1e5)
+        fr.std_data, fr.std_data_by_channel = dict(wide_std), dict(by_channel)
+        return fr
+
+    assert words in _plausible(effect, fit_with({}), a4)  # widened as a whole: refused, as before
+    assert _plausible(effect, fit_with(own), a4) == ""
+    assert words.split("(")[0] in _plausible(effect, fit_with({**own, name: wide}), a4)
+
+
+def test_a_std_by_own_misfit_keeps_the_models_own_error_and_leaves_the_fit_as_it_was():
+    fr = candidate_fit({"rate_dependence.rate_coefficient": 0.1, "k_compression": 1e6},
+                       {"rate_dependence.rate_coefficient": 0.16, "k_compression": 2e5})
+    fr.std_data = {"rate_dependence.rate_coefficient": 0.16, "k_compression": 1e5}
+    fr.std_model = {"k_compression": math.sqrt(2e5**2 - 1e5**2)}
+    fr.std_data_by_channel = {"rate_dependence.rate_coefficient": 0.01, "k_compression": 3e4}
+    out = by_own_misfit(fr)
+    assert out.std_data == fr.std_data_by_channel
+    assert out.std == pytest.approx({"rate_dependence.rate_coefficient": 0.01,
+                                     "k_compression": math.hypot(3e4, fr.std_model["k_compression"])})
+    assert fr.std["rate_dependence.rate_coefficient"] == 0.16 and fr.std_data["k_compression"] == 1e5
+    assert by_own_misfit(dataclasses.replace(fr, std_data_by_channel={})).std == fr.std
+
+
+def test_a_gain_only_in_a_channel_missed_far_beyond_its_noise_is_not_enough():
+    """Counted in units of each channel's own misfit, as the stds are: taking 1,000 off the
+    chi2 of a z the model misses by 100 times its noise (2e6 on 200 samples, misfit 1e4) is
+    worth 0.1, less than the parameter's price ln 400; taking 600 off an x missed by twice its
+    noise (800, misfit 4) is worth 150. With the recording's sigmas both lower the BIC."""
+    m = measurement()
+    alt = (-1.0) ** np.arange(200)
+    current = FakeFit(m, {"x_m": 0.002 * alt, "z_m": 0.1 * alt}, ("k_compression",))
+    shaved_z = FakeFit(m, {"x_m": 0.002 * alt, "z_m": 0.1 * alt * math.sqrt(1.0 - 1e3 / 2e6)}, ("k_compression", "x.y"))
+    better_x = FakeFit(m, {"x_m": 0.001 * alt, "z_m": 0.1 * alt}, ("k_compression", "x.y"))
+    assert bic(shaved_z, {}) - bic(current, {}) == pytest.approx(-1e3 + math.log(400), rel=1e-6)
+    assert bic(better_x, {}) - bic(current, {}) == pytest.approx(-600 + math.log(400), rel=1e-6)
+    why = own_misfit_check(current, shaved_z, {}, 10.0)
+    assert f"its BIC change is {-0.1 + math.log(400):+.1f}" in why and "far beyond their noise" in why
+    assert own_misfit_check(current, better_x, {}, 10.0) == ""
+    assert own_misfit_check(current, better_x, {"x_m": 4.0}, 10.0) == ""  # 600 / 4 in 50 samples, misfit 4: -32.0
 
 
 def test_a_candidate_whose_fit_ends_at_a_bound_is_not_a_discovery(a4):

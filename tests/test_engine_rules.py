@@ -15,7 +15,7 @@ from identify.identification import _second_body_notes
 
 
 def fake_fit(values, std, priors, channels=("x_m", "vx_mps"), derived=()):
-    fr = SimpleNamespace(values=values, std=std, std_data=dict(std), priors=priors, held_measured={}, units={}, PULL_CONFLICT=FitResult.PULL_CONFLICT, at_bound={},
+    fr = SimpleNamespace(values=values, std=std, std_data=dict(std), std_data_by_channel={}, priors=priors, held_measured={}, units={}, PULL_CONFLICT=FitResult.PULL_CONFLICT, at_bound={},
                          trajectory=SimpleNamespace(crush=np.array([0.0, 0.5]), engine_force=np.array([0.0, 1e5]),
                                                     engine_x=np.array([0.0, 0.45]), mounts_broken=np.array([0.0, 1.0])),
                          measurement=SimpleNamespace(channels={c: None for c in channels}, derived=derived))

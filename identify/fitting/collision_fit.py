@@ -171,6 +171,13 @@ class FitResult:
     model_error_where : name -> where its ``std_model`` was measured, for the parameters whose
         model error is a regime's (``identify.fitting.model_error.REGIMES``: the fitted model
         lifts the rear wheels within the recording) rather than the clean worlds'.
+    std_data_by_channel : name -> the data's standard deviation (its unit) from the same
+        residuals and Jacobian at the same optimum with each channel's rows widened by that
+        channel's own misfit and correlation time (``least_squares.parameter_covariance``,
+        ``per_channel=True``, the groups of the fit weighted by misfit), for a fit whose
+        covariance was widened as a whole (``FitOptions.misfit_weights`` False); empty when
+        it was not (``std_data`` is that already). Discovery judges whether a candidate's
+        parameters are determined by it (``identify.discover.loop.by_own_misfit``).
     converged : the best start converged; starts_at_best : how many starts reached it;
     other_minima : costs of distinct worse minima found.
     params, speed, contact_time : the fitted model (sim.Params, m/s, s).
@@ -210,6 +217,7 @@ class FitResult:
     model_choice: dict[str, float] = dataclasses.field(default_factory=dict)
     held_measured: dict[str, dict] = dataclasses.field(default_factory=dict)
     model_error_where: dict[str, str] = dataclasses.field(default_factory=dict)
+    std_data_by_channel: dict[str, float] = dataclasses.field(default_factory=dict)
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -699,8 +707,16 @@ def fit(
     spec_all, free = free, tuple(free[i] for i in fitted)
     unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), groups, n_res,
                                per_channel=options.misfit_weights, tau_at_least=approach_tau_floor(groups))
+    by_channel = None  # FitResult.std_data_by_channel: the same optimum, each channel widened by its own misfit
+    if not options.misfit_weights:
+        own = weighting_groups(channels, w, np.asarray(measurement.t))
+        by_channel = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), own, n_res,
+                                          per_channel=True, tau_at_least=approach_tau_floor(own))
     if contact_held:
-        unc = held_at_measurement(unc, [p.name for p in free].index("contact_time"), sigma)
+        i_held = [p.name for p in free].index("contact_time")
+        unc = held_at_measurement(unc, i_held, sigma)
+        if by_channel is not None:
+            by_channel = held_at_measurement(by_channel, i_held, sigma)
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}
@@ -761,6 +777,7 @@ def fit(
         priors={k: (float(v[0]), float(v[1])) for k, v in priors.items() if k not in held},
         held_measured=held_measured,
         model_error_where={n: w for n, w in model_error_where.items() if n in names},
+        std_data_by_channel={} if by_channel is None else dict(zip(names, map(float, by_channel.std))),
     )
     result.identified = {**assess_identifiability(result, fitted_channels),
                          **log_scale_identifiability(free, result.values, result.std, result.std_data, result.std_model)}
