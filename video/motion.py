@@ -976,14 +976,14 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
     ts, xs, ws = tt[sel], xx[sel], 1.0 / ss[sel]
     dt = 1.0 / fps
     grid = np.arange(lo, guess + 2 * dt, 0.02 * dt)
-    phi = 0.0
+    new = 0.0
     for _ in range(ONSET_ITERATIONS):
+        phi = new  # the correlation this fit's rows have taken out (what the note says)
         tc, _ = _coarse_to_fine(grid, lambda tc: _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, phi)[0])
         _, coef = _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, phi)
         new = _lag_one_correlation((xs - _onset_design(ts, tc, ONSET_EXPONENT) @ coef) * ws)
         if abs(new - phi) < ONSET_CORRELATION_TOL:
             break
-        phi = new
     how = "contact from the onset of deceleration (a force growing from zero with the crush"
     return float(tc), how + (f"; its residuals' frame-to-frame correlation {phi:.2f} taken out)" if phi else ")")
 
