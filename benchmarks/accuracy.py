@@ -388,7 +388,9 @@ def main(argv=None) -> int:
             with partial.open("a") as fh:
                 fh.write(json.dumps(row, default=float) + "\n")
 
-    if a.jobs > 1:
+    # one process's compiled fits pile up over the worlds (LLVM failed to allocate after 20 scored
+    # worlds run in one process on 2026-11-28): more worlds than a worker runs go to workers
+    if a.jobs > 1 or len(plan) > MAX_WORLDS_PER_WORKER:
         for row in in_workers(plan, a.jobs):
             keep_row(row)
             print(f"[{time.perf_counter() - t0:7.1f} s] world {row['seed']} {row['effect']}: {row['status']}",
