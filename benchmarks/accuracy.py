@@ -314,19 +314,22 @@ WORKER_DEATHS_ALLOWED = 2
 def in_workers(plan: list, jobs: int):
     """Rows of ``run_world`` over ``plan`` in ``jobs`` spawned processes, as they finish.
 
-    A worker that dies (killed for memory, a crash in compiled code) breaks the pool: the
-    worlds not finished then are run again in a fresh pool (a world whose worker died more
-    than ``WORKER_DEATHS_ALLOWED`` times is a row with status "crashed"), where a
+    The worlds go to fresh pools of ``jobs`` workers, ``jobs * MAX_WORLDS_PER_WORKER`` at a
+    time (``max_tasks_per_child`` deadlocks on Python 3.11-3.13 once a worker has reached it
+    with worlds still queued, CPython gh-115634: a run of 20 scored worlds stopped after 8 on
+    2026-11-28). A worker that dies (killed for memory, a crash in compiled code) breaks the
+    pool: the worlds not finished then are run again in a fresh pool (a world whose worker
+    died more than ``WORKER_DEATHS_ALLOWED`` times is a row with status "crashed"), where a
     ``multiprocessing.Pool`` waited for them for ever."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
     from concurrent.futures.process import BrokenProcessPool
 
     pending, deaths = list(plan), {}
     while pending:
-        with ProcessPoolExecutor(jobs, mp_context=mp.get_context("spawn"),
-                                 max_tasks_per_child=MAX_WORLDS_PER_WORKER) as pool:
-            futures = {pool.submit(_work, item): item for item in pending}
-            pending = []
+        batch, pending = pending[:jobs * MAX_WORLDS_PER_WORKER], pending[jobs * MAX_WORLDS_PER_WORKER:]
+        again = []
+        with ProcessPoolExecutor(jobs, mp_context=mp.get_context("spawn")) as pool:
+            futures = {pool.submit(_work, item): item for item in batch}
             for fut in as_completed(futures):
                 item = futures[fut]
                 try:
@@ -337,9 +340,10 @@ def in_workers(plan: list, jobs: int):
                         yield {"seed": item[0], "effect": item[1], "format": item[2], "status": "crashed",
                                "error": "its worker process died (out of memory, or a crash in compiled code)"}
                     else:
-                        pending.append(item)
-        if pending:
-            print(f"a worker died: {len(pending)} world(s) run again in a fresh pool", file=sys.stderr, flush=True)
+                        again.append(item)
+        if again:
+            print(f"a worker died: {len(again)} world(s) run again in a fresh pool", file=sys.stderr, flush=True)
+            pending = again + pending
 
 
 def main(argv=None) -> int:

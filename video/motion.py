@@ -886,18 +886,28 @@ ONSET_CORRELATION_TOL = 0.005
 ONSET_ITERATIONS = 20
 
 
-def _onset_design(t, tc, p):
+def _onset_design(t, tc, p, shake=None):
+    """The onset model's columns at ``tc``: 1, t - tc, -max(0, t - tc)^p, and ``shake`` (the
+    camera's motion taken out of x, m) when given."""
     d = np.maximum(t - tc, 0.0) ** p
-    return np.stack([np.ones_like(t), t - tc, -d], axis=1)
+    cols = [np.ones_like(t), t - tc, -d] + ([] if shake is None else [shake])
+    return np.stack(cols, axis=1)
 
 
-def _onset_sse(t, x, w, tc, p, phi=0.0):
-    """Weighted least squares of the onset model at ``tc`` on rows whose lag-one correlation
-    ``phi`` is taken out: (chi-square of those rows, coefficients a, b, c)."""
-    A = _onset_design(t, tc, p) * w[:, None]
+def _onset_rows(t, x, w, tc, p, phi=0.0, shake=None):
+    """The onset model's weighted rows at ``tc`` and their right-hand side, with the rows'
+    lag-one correlation ``phi`` taken out: (A, y)."""
+    A = _onset_design(t, tc, p, shake) * w[:, None]
     y = x * w
     if phi:
         A, y = A[1:] - phi * A[:-1], y[1:] - phi * y[:-1]
+    return A, y
+
+
+def _onset_sse(t, x, w, tc, p, phi=0.0, shake=None):
+    """Weighted least squares of the onset model at ``tc`` on rows whose lag-one correlation
+    ``phi`` is taken out: (chi-square of those rows, coefficients a, b, c[, the shake's])."""
+    A, y = _onset_rows(t, x, w, tc, p, phi, shake)
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     r = A @ coef - y
     return float(r @ r), coef
@@ -936,8 +946,19 @@ def deceleration_start(t: np.ndarray, x: np.ndarray) -> float:
     return float(tt[min(slow + lag, len(tt) - 1)])
 
 
+#: A camera motion taken out of x counts in the onset's fit where it reaches this many of
+#: x's own sigmas in the fitted window, m/m.
+SHAKE_IN_ONSET_SIGMAS = 1.0
+#: The largest share of the shake's correction a camera's turn can leave in x: a point u px
+#: off the axis moves (1 + u^2/f^2) times what one on it does, and within a crash camera's
+#: field of view (up to 70 degrees across, u/f <= 0.7) the car's and the fixed targets'
+#: factors differ by less than half. A larger share is not the turn's (development film
+#: 960053, whose x was already 9.4 mm off: -100 %, and the onset went 7.7 ms early with it).
+MAX_SHAKE_SHARE = 0.5
+
+
 def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
-                 window_after_s: float = 0.012) -> tuple[float, str]:
+                 window_after_s: float = 0.012, shake: np.ndarray | None = None) -> tuple[float, str]:
     """Time at which the car's deceleration starts, s (sub-frame).
 
     A first guess is where the speed (differences of ``x`` over 5 frames) falls 2 %
@@ -948,6 +969,17 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
     again, until that correlation settles (Cochrane-Orcutt, :data:`ONSET_MAX_CORRELATION`):
     a tracked x that wanders over several frames is not taken for the onset's curvature.
 
+    With ``shake``, the camera's motion that was taken out of x (a shake measured on fixed
+    targets or the background, which the impact sets off), a multiple of it is fitted with
+    the onset (a fourth column) where it exceeds x's sigma in the window, and dropped again
+    where it comes out beyond :data:`MAX_SHAKE_SHARE`: a camera that turns moves the
+    picture's edges more than its middle (by x^2/f^2), so a shake measured at the
+    barrier and taken out of the car leaves a share of it in x, starting with the contact.
+    Fitted as an onset, that share moved it: on development films 960080 and 960093 (3.5 and
+    3.8 px of shake, 21 and 13 % of it left in x: up to 3.5 and 4.0 mm) the onset came out
+    18.9 and 12.1 ms early, and the contact was looked for in the picture around it; with the
+    column, 0.9 ms early and on time.
+
     Parameters
     ----------
     t, x, sigma : (n,) float
@@ -956,6 +988,9 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
         Frames per second.
     window_after_s : float
         How far past the first guess the fit reaches, s.
+    shake : (n,) float, optional
+        The camera's motion taken out of ``x`` per frame, in x's units (m; NaN or 0 where
+        none was).
 
     Returns
     -------
@@ -964,28 +999,75 @@ def contact_time(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, fps: float,
     how : str
         A short description for the notes.
     """
+    guess, ts, xs, ws, cam = _onset_window(t, x, sigma, window_after_s, shake)
+    grid = np.arange(guess - 0.03, guess + 2.0 / fps, 0.02 / fps)
+    how = "contact from the onset of deceleration (a force growing from zero with the crush"
+    tc, phi, coef = _fitted_onset(grid, ts, xs, ws, cam)
+    if cam is not None and abs(coef[3]) > MAX_SHAKE_SHARE:
+        how += (f"; the camera's shake correction not fitted with it: {100 * coef[3]:+.0f} % of it came out left in x,"
+                " more than a camera's turn leaves")
+        tc, phi, coef = _fitted_onset(grid, ts, xs, ws, None)
+    elif cam is not None:
+        how += f"; {100 * abs(coef[3]):.0f} % of the camera's shake fitted as left in x"
+    return float(tc), how + (f"; its residuals' frame-to-frame correlation {phi:.2f} taken out)" if phi else ")")
+
+
+def _fitted_onset(grid, ts, xs, ws, cam):
+    """The onset model's best ``tc`` over ``grid`` (s) on the frames ``ts, xs, ws`` (and the
+    shake column ``cam``, or None), the residuals' lag-one correlation taken out until it
+    settles: (tc s, the correlation the last fit's rows took out, its coefficients)."""
+    new = 0.0
+    for _ in range(ONSET_ITERATIONS):
+        phi = new  # the correlation this fit's rows have taken out (what the note says)
+        tc, _ = _coarse_to_fine(grid, lambda tc: _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, phi, cam)[0])
+        _, coef = _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, phi, cam)
+        new = _lag_one_correlation((xs - _onset_design(ts, tc, ONSET_EXPONENT, cam) @ coef) * ws)
+        if abs(new - phi) < ONSET_CORRELATION_TOL:
+            break
+    return tc, phi, coef
+
+
+def _onset_window(t, x, sigma, window_after_s, shake):
+    """The frames the onset is fitted on: (the first guess s, their times s, x m, weights
+    1/m, and the camera's shake taken out of x there, m, or None where it stays below x's
+    sigma in the window: :data:`SHAKE_IN_ONSET_SIGMAS`)."""
     ok = np.isfinite(x)
     guess = deceleration_start(t, x)
     tt, xx = t[ok], x[ok]
     ss = np.maximum(np.where(np.isfinite(sigma[ok]), sigma[ok], np.nanmedian(sigma)), 1e-7)
-    lo = guess - 0.03
-    hi_fit = guess + window_after_s
-    sel = (tt >= lo - 0.03) & (tt <= hi_fit)
+    sel = (tt >= guess - 0.06) & (tt <= guess + window_after_s)
     if sel.sum() < 8:
         raise VideoError("too few frames around the contact to locate it")
-    ts, xs, ws = tt[sel], xx[sel], 1.0 / ss[sel]
-    dt = 1.0 / fps
-    grid = np.arange(lo, guess + 2 * dt, 0.02 * dt)
-    new = 0.0
-    for _ in range(ONSET_ITERATIONS):
-        phi = new  # the correlation this fit's rows have taken out (what the note says)
-        tc, _ = _coarse_to_fine(grid, lambda tc: _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, phi)[0])
-        _, coef = _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, phi)
-        new = _lag_one_correlation((xs - _onset_design(ts, tc, ONSET_EXPONENT) @ coef) * ws)
-        if abs(new - phi) < ONSET_CORRELATION_TOL:
-            break
-    how = "contact from the onset of deceleration (a force growing from zero with the crush"
-    return float(tc), how + (f"; its residuals' frame-to-frame correlation {phi:.2f} taken out)" if phi else ")")
+    ws = 1.0 / ss[sel]
+    cam = None
+    if shake is not None:
+        cam = np.nan_to_num(np.asarray(shake, float)[ok][sel])
+        if not np.max(np.abs(cam) * ws, initial=0.0) > SHAKE_IN_ONSET_SIGMAS:
+            cam = None  # no shake in the window (or one below x's noise): nothing to take out
+    return guess, tt[sel], xx[sel], ws, cam
+
+
+def shake_left_in_x(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, tc: float, shake: np.ndarray,
+                    window_after_s: float = 0.012) -> tuple[float, float] | None:
+    """The share of the camera's shake correction ``shake`` (m per frame) left in ``x`` (m),
+    fitted with the onset model at the contact ``tc`` (s) on :func:`contact_time`'s frames:
+    (share, its one-sigma; the residuals' lag-one correlation taken out and the sigma scaled
+    by their reduced chi-square when above 1), or None when the shake stays below x's sigma
+    there. A share beyond :data:`MAX_SHAKE_SHARE` is returned as found: not the turn's, the
+    caller leaves x as it is. The window is where the car's motion has a model (the
+    approach, the onset of the force); the share found there stands for the whole film's (a
+    camera turn's growth off the axis, ``fit_camera_turn``, is the same in every frame)."""
+    _, ts, xs, ws, cam = _onset_window(t, x, sigma, window_after_s, shake)
+    if cam is None:
+        return None
+    _, coef = _onset_sse(ts, xs, ws, tc, ONSET_EXPONENT, 0.0, cam)
+    phi = _lag_one_correlation((xs - _onset_design(ts, tc, ONSET_EXPONENT, cam) @ coef) * ws)
+    A, y = _onset_rows(ts, xs, ws, tc, ONSET_EXPONENT, phi, cam)
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    r = A @ coef - y
+    reduced = float(r @ r) / max(len(y) - A.shape[1], 1)
+    cov = np.linalg.pinv(A.T @ A) * max(reduced, 1.0)
+    return float(coef[3]), float(np.sqrt(cov[3, 3]))
 
 
 # ------------------------------------------------------------------- wheel events
