@@ -862,6 +862,36 @@ def test_only_models_the_recording_does_not_rule_out_are_alternatives(monkeypatc
     assert loop.alternatives([accepted], fits, current, missing, vehicle=None) == []
 
 
+def test_an_alternative_that_moves_the_speed_the_approach_fixes_is_none(monkeypatch):
+    """Development world 960019: the unexplained force's linearised refit put the impact
+    speed 5 % low, 55 of its data sigmas (the car's free motion before contact fixes it),
+    and the reported speed's std became 5 % through it. Such a model contradicts the approach:
+    it is no alternative; one within 3 data sigmas stays one, a candidate's fit as well."""
+    import identify.discover.loop as loop
+
+    current = fitted({"k_compression": 7.5e5, "impact_speed": 17.60}, {"k_compression": 3e4, "impact_speed": 0.016},
+                     {"k_compression": 5e4})
+    accepted = [Trial("stiffness_zone", 0.0, -30.0, None, {}, True, "")]
+    missing = types.SimpleNamespace(parameter_shift={"k_compression": -2.2e4, "impact_speed": -0.88},
+                                    bic_before=500.0, bic_after=489.2)
+    assert loop.alternatives([accepted], {}, current, missing, vehicle=None) == []
+    missing.parameter_shift["impact_speed"] = -0.04  # 2.5 data sigmas
+    alts = loop.alternatives([accepted], {}, current, missing, vehicle=None)
+    assert [a.label for a in alts] == ["an unexplained force"]
+    shift = loop.alternatives_shift(current, alts)
+    assert shift["impact_speed"] == pytest.approx(0.04)
+    # a candidate's fit that moves the speed that far is no alternative either
+    zone = fitted({"k_compression": 6.0e5, "impact_speed": 16.9, "stiffness_zone.depth": 0.3, "stiffness_zone.k_zone": 2e6},
+                  {"k_compression": 3e4, "impact_speed": 0.016, "stiffness_zone.depth": 0.01,
+                   "stiffness_zone.k_zone": 1e5}, {})
+    monkeypatch.setattr(loop, "_refuted", lambda effect, fr, vehicle: False)
+    trials = [Trial("stiffness_zone", 0.0, -30.0, None, {}, False, "its depth is not determined")]
+    assert loop.alternatives([trials], {"stiffness_zone": zone}, current, None, vehicle=None) == []
+    zone.values["impact_speed"] = 17.61
+    assert [a.label for a in loop.alternatives([trials], {"stiffness_zone": zone}, current, None, vehicle=None)] == [
+        "stiffness zone"]
+
+
 def test_residuals_without_a_window_are_not_called_white_noise_when_they_are_correlated():
     """Development film 960016 (an engine reaching the barrier; x off by -9 then +5 mm) was
     reported as "residuals are white noise in all channels": no window stood out of the
