@@ -304,7 +304,8 @@ def _work(args):
 
 
 # A worker's compiled fits pile up over the worlds it runs (5.4 GB after 20 development worlds,
-# when LLVM then failed to allocate and the worker died): each worker runs at most this many
+# when LLVM then failed to allocate and the worker died): a pool of fresh workers gets this many
+# worlds per worker (``in_workers``), then is replaced
 MAX_WORLDS_PER_WORKER = 8
 # a world unfinished when a worker died (which one killed it cannot be told) is run again in a
 # fresh pool this many times, then is a crashed row
