@@ -862,32 +862,39 @@ def test_only_models_the_recording_does_not_rule_out_are_alternatives(monkeypatc
     assert loop.alternatives([accepted], fits, current, missing, vehicle=None) == []
 
 
-def test_an_alternative_that_moves_the_speed_the_approach_fixes_is_none(monkeypatch):
-    """Development world 960019: the unexplained force's linearised refit put the impact
-    speed 5 % low, 55 of its data sigmas (the car's free motion before contact fixes it),
-    and the reported speed's std became 5 % through it. Such a model contradicts the approach:
-    it is no alternative; one within 3 data sigmas stays one, a candidate's fit as well."""
+def test_an_alternative_that_moves_what_was_measured_before_the_fit_is_none(monkeypatch):
+    """Development world 960008: the unexplained force's linearised refit put the impact
+    speed 8 % high with the film's scale 18 % off (the approach's pixels per frame fix their
+    ratio; the tape's sigma 0.06 %), and the reported speed's std became 8.4 % through it.
+    A model that moves a measured quantity 3 of its measurement's sigmas further from it than
+    the reported model has it is no alternative; one within that stays one, a candidate's fit
+    as well, and one that moves it nearer (the reported contact far off the one seen) too."""
     import identify.discover.loop as loop
 
-    current = fitted({"k_compression": 7.5e5, "impact_speed": 17.60}, {"k_compression": 3e4, "impact_speed": 0.016},
+    current = fitted({"k_compression": 6.1e5, "impact_speed": 17.25, "length_scale": 1.0002, "contact_time": -0.0099},
+                     {"k_compression": 3e4, "impact_speed": 0.5, "length_scale": 0.001, "contact_time": 1e-4},
                      {"k_compression": 5e4})
-    accepted = [Trial("stiffness_zone", 0.0, -30.0, None, {}, True, "")]
-    missing = types.SimpleNamespace(parameter_shift={"k_compression": -2.2e4, "impact_speed": -0.88},
-                                    bic_before=500.0, bic_after=489.2)
+    current.priors = {"length_scale": (1.0, 0.00056), "contact_time": (0.0002, 0.00051)}
+    accepted = [Trial("front_wheel_block", 0.0, -30.0, None, {}, True, "")]
+    missing = types.SimpleNamespace(parameter_shift={"k_compression": 8.6e4, "impact_speed": 1.39, "length_scale": 0.18},
+                                    bic_before=500.0, bic_after=417.2)
     assert loop.alternatives([accepted], {}, current, missing, vehicle=None) == []
-    missing.parameter_shift["impact_speed"] = -0.04  # 2.5 data sigmas
+    missing.parameter_shift["length_scale"] = 0.0012  # 1.8 sigmas farther from the tape's scale
     alts = loop.alternatives([accepted], {}, current, missing, vehicle=None)
     assert [a.label for a in alts] == ["an unexplained force"]
-    shift = loop.alternatives_shift(current, alts)
-    assert shift["impact_speed"] == pytest.approx(0.04)
-    # a candidate's fit that moves the speed that far is no alternative either
-    zone = fitted({"k_compression": 6.0e5, "impact_speed": 16.9, "stiffness_zone.depth": 0.3, "stiffness_zone.k_zone": 2e6},
-                  {"k_compression": 3e4, "impact_speed": 0.016, "stiffness_zone.depth": 0.01,
+    assert loop.alternatives_shift(current, alts)["impact_speed"] == pytest.approx(1.39)
+    missing.parameter_shift = {"contact_time": 0.0083}  # nearer the contact seen: stays
+    assert [a.label for a in loop.alternatives([accepted], {}, current, missing, vehicle=None)] == [
+        "an unexplained force"]
+    # a candidate's fit that moves the scale that far is no alternative either
+    zone = fitted({"k_compression": 6.0e5, "impact_speed": 16.9, "length_scale": 0.98, "stiffness_zone.depth": 0.3,
+                   "stiffness_zone.k_zone": 2e6},
+                  {"k_compression": 3e4, "impact_speed": 0.016, "length_scale": 0.001, "stiffness_zone.depth": 0.01,
                    "stiffness_zone.k_zone": 1e5}, {})
     monkeypatch.setattr(loop, "_refuted", lambda effect, fr, vehicle: False)
     trials = [Trial("stiffness_zone", 0.0, -30.0, None, {}, False, "its depth is not determined")]
     assert loop.alternatives([trials], {"stiffness_zone": zone}, current, None, vehicle=None) == []
-    zone.values["impact_speed"] = 17.61
+    zone.values["length_scale"] = 1.0005
     assert [a.label for a in loop.alternatives([trials], {"stiffness_zone": zone}, current, None, vehicle=None)] == [
         "stiffness zone"]
 
