@@ -754,11 +754,12 @@ def _contact(film, p: _Pose, dropped, cg_uv, cg_src, car, s, d, lens, stab, fps,
     cut = max([i for i in dropped if i < p.onset_guess_s * fps - 3], default=-1)
     if cut >= 0:
         x_fit[: cut + 1] = np.nan
+    shake = _shake_along_x(stab, d, s, p.axes)
     try:
-        tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps, shake=_shake_along_x(stab, d, s, p.axes))
+        tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps, shake=shake)
     except VideoError:
         x_fit = p.XZ[:, 0]
-        tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps, shake=_shake_along_x(stab, d, s, p.axes))
+        tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps, shake=shake)
     notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
     seen = None
     if config.see_contact:  # the nose is placed from the CG: without one it is not looked for, and said

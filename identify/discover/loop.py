@@ -818,8 +818,8 @@ def alternatives(rounds: list[list[Trial]], fits: dict[str, FitResult], current:
     rule out, however it fared otherwise (a depth the data do not fix, a shape a generic
     force fits better, a BIC gain short of the threshold); and the missing force estimated
     on ``current`` (``missing``: ``identify.discover.missing_force``, with its linearised
-    refit of the parameters), or None. Neither where it moves the impact speed the approach
-    fixes (:func:`against_the_approach`)."""
+    refit of the parameters), or None. Neither where it moves what was measured before the
+    fit away from its measurement (:func:`against_what_was_measured`)."""
     out = []
     if rounds and not any(tr.accepted for tr in rounds[-1]):
         for tr in rounds[-1]:
@@ -827,16 +827,16 @@ def alternatives(rounds: list[list[Trial]], fits: dict[str, FitResult], current:
             if alt is None or not tr.settled or not math.isfinite(tr.delta_bic) or _refuted(tr.effect, alt, vehicle):
                 continue
             values = {n: alt.values[n] for n in current.names if n in alt.values}
-            if not against_the_approach(values, current):
+            if not against_what_was_measured(values, current):
                 out.append(Alternative(tr.effect.replace("_", " "), tr.delta_bic, values))
     if missing is not None and missing.parameter_shift:
         values = {n: current.values[n] + d for n, d in missing.parameter_shift.items()}
-        if not _beyond_range(values) and not against_the_approach(values, current):
+        if not _beyond_range(values) and not against_what_was_measured(values, current):
             out.append(Alternative("an unexplained force", missing.bic_after - missing.bic_before, values))
     return out
 
 
-def against_the_approach(values: dict[str, float], current: FitResult) -> bool:
+def against_what_was_measured(values: dict[str, float], current: FitResult) -> bool:
     """Whether ``values`` move a quantity measured before the fit (``current.priors``: the
     film's scale from its tape or hubs, the contact seen, a header's impact speed) further
     from its measurement than ``current`` has it by more than ``FitResult.PULL_CONFLICT`` of
