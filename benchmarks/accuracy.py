@@ -156,7 +156,7 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
         row["model_rear_lift_ms"] = (doc.get("model_events_ms") or {}).get("rear_wheel_lift")
         row["true_rear_lift_ms"] = truth.get("events_ms", {}).get("rear_wheel_lift")
         # what was known before the fit (the contact seen, the approach's speed), and how far the fit pulled it
-        row["priors"] = {name: {k: p.get(k) for k in ("prior", "prior_std", "value", "std", "std_data", "pull", "held", "held_at")}
+        row["priors"] = {name: {k: p.get(k) for k in ("prior", "prior_std", "value", "std", "std_data", "pull", "held", "held_at", "at_bound")}
                          for name, p in doc.get("priors", {}).items()}
     return row
 

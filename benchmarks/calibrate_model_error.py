@@ -81,9 +81,9 @@ def errors_of(row: dict) -> dict[str, tuple[float, float]]:
     if row.get("fit_contact_err_ms") is not None and row.get("contact_std_data_ms"):  # a film's, s
         out["contact_time"] = (row["fit_contact_err_ms"] / 1e3, row["contact_std_data_ms"] / 1e3)
         # a contact held, not fitted: the error of where the fitted channels alone put it (the
-        # fit's contact is where it was held)
+        # fit's contact is where it was held); one the fit's range stopped measured the range
         held = row.get("priors", {}).get("contact_time") or {}
-        if held.get("held") and held.get("std_data"):
+        if held.get("held") and held.get("std_data") and not held.get("at_bound"):
             out[CONTACT_FROM_MOTION] = (row["fit_contact_err_ms"] / 1e3 + held["value"] - held["held_at"],
                                         held["std_data"])
     # a measured engine's parameters (the base model's); an engine discovery named on a clean

@@ -482,7 +482,13 @@ def fit_warnings(fr) -> list[str]:
            " the recording, set it (the model may be trading it against what it cannot explain)"
            for name, where in fr.at_bound.items()]
     for name, p in fr.pulls().items():
-        if p["conflict"] and p.get("held"):
+        if p.get("at_bound"):
+            conflict = (f", already {p['pull']:+.1f} sigma from where the recording measured it: the model and the"
+                        " recording disagree there" if p["conflict"] else "")
+            out.append(f"{name}: the fitted channels alone ran {p['at_bound']} ({p['value']:.4g} {p['unit']}): they"
+                       f" cannot place it within the fit's range{conflict}; held where the recording measured it,"
+                       f" {p['held_at']:.4g} +- {p['held_std']:.2g}")
+        elif p["conflict"] and p.get("held"):
             out.append(f"{name}: the fitted channels alone put it at {p['value']:.4g} +- {p['std']:.2g} {p['unit']},"
                        f" {p['pull']:+.1f} sigma from where the recording measured it ({p['prior']:.4g} +-"
                        f" {p['prior_std']:.2g}): the model and the recording disagree there; held at the two combined,"

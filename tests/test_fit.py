@@ -334,6 +334,32 @@ def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pull
     assert seen.covariance[i, i] == pytest.approx(seen.pulls()["contact_time"]["held_std"] ** 2)
 
 
+def test_where_the_channels_alone_run_to_the_contacts_bound_it_is_said_and_not_combined(a4):
+    """The channels' own contact estimate that the fit's range stopped (here the model's
+    contact 13 ms after the one measured, the range +-10 ms) is the range's, not a measurement:
+    it is not combined with the measured contact (held where measured), and the pull, the
+    warning and the report say it ran to the bound."""
+    from identify.fitting.collision_fit import CONTACT_FROM_MOTION, FitOptions
+    from identify.fitting.model_error import ModelError
+    from identify.identification import fit_warnings
+    from identify.report.markdown import prior_lines
+
+    off = dataclasses.replace(synthetic_measurement(a4, named_params("paper_identified"), contact_time=0.013),
+                              contact_time_sigma=0.001)
+    r = fit(off, a4, model_error=ModelError(absolute={CONTACT_FROM_MOTION: 0.0}),
+            options=FitOptions(starts=1, misfit_weights=False))
+    pull = r.pulls()["contact_time"]
+    assert pull["held"] and "upper bound" in pull["at_bound"] and pull["value"] > 0.0098
+    assert pull["held_at"] == 0.0 and pull["held_std"] == 0.001
+    assert r.values["contact_time"] == 0.0 and r.std["contact_time"] == pytest.approx(0.001)
+    assert pull["conflict"]  # 10 ms at least, against 1 ms: a conflict however far beyond the bound it lies
+    warned = [w for w in fit_warnings(r) if w.startswith("contact_time: the fitted channels alone ran at its upper")]
+    assert len(warned) == 1 and "cannot place it within the fit's range" in warned[0]
+    assert "disagree there" in warned[0] and "held where the recording measured it, 0 +- 0.001" in warned[0]
+    line = prior_lines(r.pulls())[0]
+    assert "ran at its upper bound" in line and "held where measured, 0 +- 1 ms" in line
+
+
 def test_a_channel_the_model_cannot_follow_no_longer_moves_what_the_others_measure(a4, paper_measurement):
     """A heave and a pitch the model cannot follow (``with_heave_the_model_cannot_follow``),
     added to a recording whose contact was seen to 0.3 ms. Fitted with

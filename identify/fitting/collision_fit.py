@@ -161,13 +161,16 @@ class FitResult:
     model_choice : name -> how far the mechanisms discovery added moved a base parameter
         from the base model's fit (its unit), counted in ``std_model``
         (``identify.discover.loop.with_model_choice``); empty without discoveries.
-    held_measured : name -> {measured, sigma[, model, model_std_data, model_std, held_at, held_std]}
+    held_measured : name -> {measured, sigma[, model, model_std_data, model_std, held_at, held_std,
+        model_at_bound]}
         for a measured quantity the fit held, not fitted (the contact seen:
         ``FitOptions.hold_measured_contact``), in ``values`` where it was held with its sigma
         carried into the others' covariance; model: where the fitted channels alone put it,
         model_std that estimate's std with the model's own error, model_std_data without;
         held_at, held_std: the measurement and that estimate combined, where it was held
-        (``FitOptions.contact_from_motion``; without, at the measurement).
+        (``FitOptions.contact_from_motion``; without, at the measurement); model_at_bound:
+        which bound of its range stopped that estimate (then not combined: held at the
+        measurement).
     model_error_where : name -> where its ``std_model`` was measured, for the parameters whose
         model error is a regime's (``identify.fitting.model_error.REGIMES``: the fitted model
         lifts the rear wheels within the recording) rather than the clean worlds'.
@@ -234,7 +237,9 @@ class FitResult:
         quantity the fit held (``held_measured``: the contact seen) has ``held`` True, its value
         where the fitted channels alone would put it, std that estimate's (std_data without the
         model's own error), pull their difference over both sigmas in quadrature, and held_at,
-        held_std where the fit held it (the two combined)."""
+        held_std where the fit held it (the two combined); at_bound which bound of the fit's
+        range stopped the channels' estimate ('' when none): it then says no more than that
+        they put it at least that far off, a pull and a conflict at least that large."""
         out = {}
         for name, h in self.held_measured.items():
             if "model" not in h:  # not compared (``FitOptions.contact_from_motion``)
@@ -243,7 +248,7 @@ class FitResult:
             out[name] = {"prior": h["measured"], "prior_std": h["sigma"], "value": h["model"], "std": h["model_std"],
                          "std_data": h["model_std_data"], "unit": self.units.get(name, ""), "pull": pull,
                          "conflict": bool(abs(pull) > self.PULL_CONFLICT), "held": True,
-                         "held_at": h["held_at"], "held_std": h["held_std"]}
+                         "held_at": h["held_at"], "held_std": h["held_std"], "at_bound": h.get("model_at_bound", "")}
         for name, (mu, sigma) in self.priors.items():
             if name in self.values:
                 pull = (self.values[name] - mu) / sigma
@@ -431,11 +436,14 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
     alone put it (:func:`_contact_from_motion`, its std the data's and ``model_std``, the
     model's own error of that estimate, in quadrature): the inverse-variance mean, where the
     fit is then held (``held`` updated, the fit continued from ``u`` in ``weights``): the
-    nearer the measurement's sigma is to the channels', the more the channels move it.
+    nearer the measurement's sigma is to the channels', the more the channels move it. An
+    estimate the contact's range stopped (``FreeParameter.at_bound``) is the range's, not the
+    channels': it is reported (``model_at_bound``) and not combined, the contact held where
+    it was measured.
 
     ``data``: the fit's, its contact's mask 1 (free) and no prior on it. Returns (u, the
-    combined sigma, {model, model_std_data, model_std, held_at, held_std}); without a finite
-    estimate from the channels, (u, the measurement's sigma, {})."""
+    combined sigma, {model, model_std_data, model_std, held_at, held_std[, model_at_bound]});
+    without a finite estimate from the channels, (u, the measurement's sigma, {})."""
     seen = held["contact_time"]
     u_seen = u.at[i_c].set(spec[i_c].to_unconstrained(seen))  # held, its u was never set: the measured value
     u_m, cost = _contact_from_motion(spec, channels, n_out, options, {**data, "w": jnp.asarray(weights)}, u_seen, i_c)
@@ -447,6 +455,10 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
                                n_res, per_channel=per_channel, tau_at_least=approach_tau_floor(groups))
     model, std_data = float(spec[i_c].to_physical(u_m[i_c])), float(unc.std[fitted.index(i_c)])
     std = math.hypot(std_data, model_std)
+    bound = spec[i_c].at_bound(model)
+    if bound:
+        return u, sigma, {"model": model, "model_std_data": std_data, "model_std": std, "held_at": seen,
+                          "held_std": sigma, "model_at_bound": bound}
     w_seen, w_model = sigma**-2, std**-2
     at, at_std = (seen * w_seen + model * w_model) / (w_seen + w_model), (w_seen + w_model) ** -0.5
     if abs(at - seen) > HOLD_MOVED * sigma:  # continued from the held optimum with the contact where it is now held

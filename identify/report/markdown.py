@@ -59,6 +59,9 @@ def prior_lines(priors: dict) -> list[str]:
         fitted = "the fitted channels alone" if p.get("held") else "fitted"
         held = (f"; held at the two combined, {p['held_at'] * scale:.4g} +- {p['held_std'] * scale:.2g}{u}"
                 if p.get("held") else "")
+        if p.get("at_bound"):
+            held = (f" **ran {p['at_bound']}: the channels alone cannot place it**; held where measured,"
+                    f" {p['held_at'] * scale:.4g} +- {p['held_std'] * scale:.2g}{u}")
         out.append(f"{label}: {source} {p['prior'] * scale:.4g} +- {p['prior_std'] * scale:.2g}{u}, {fitted}"
                    f" {p['value'] * scale:.4g} +- {p['std'] * scale:.2g}{u} (pull {p['pull']:+.1f} sigma){held}{flag}")
     return out
