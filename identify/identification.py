@@ -167,6 +167,8 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             "other_minima_cost": fr.other_minima,
             "fitted_channels": [c for c in fr.rms if c not in fr.measurement.derived],
             "derived_channels": [c for c in fr.rms if c in fr.measurement.derived],
+            # a channel fitted only up to then (ms after contact), its later samples left out
+            "fitted_until_ms": dict(fr.measurement.fitted_until_ms),
             "correlation_time_samples": dict(fr.correlation_time),  # integrated autocorrelation time of each residual
             # each channel's reduced chi-square (at least 1): the factor its variance was widened by
             "misfit_by_channel": dict(fr.misfit),

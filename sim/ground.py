@@ -31,7 +31,8 @@ from sim.vehicle import GRAVITY
 
 
 def ground_forces(q, v, vehicle, params, front_blocked, solver):
-    """Generalised force of gravity, axles and tyres, and what the outputs need.
+    """Generalised force of gravity, axles and tyres (their rolling resistance and a blocked
+    wheel's sliding; the rolling wheels' spin is ``sim.wheels``), and what the outputs need.
 
     Parameters
     ----------
@@ -46,7 +47,6 @@ def ground_forces(q, v, vehicle, params, front_blocked, solver):
     normal : (2,) N, front and rear axle normal forces (>= 0).
     margin : (2,) N, contact margins (negative: wheel off the ground).
     lift : (2,) m, how far each axle is above the height where its wheel just touches.
-    axle_speed : (2,) m/s, horizontal speed of each axle (for the wheels' spin).
     """
     x_dot, z_dot, pitch_rate = v[0], v[1], v[2]
     s, c = jnp.sin(q[2]), jnp.cos(q[2])
@@ -78,5 +78,4 @@ def ground_forces(q, v, vehicle, params, front_blocked, solver):
             jnp.sum(normal * (-px * c - pz * s)) + jnp.sum(traction * ground_lever),
         ]
     )
-    axle_speed = x_dot + (-px * s + pz * c) * pitch_rate
-    return force, normal, margin, lift, axle_speed
+    return force, normal, margin, lift

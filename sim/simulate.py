@@ -3,7 +3,9 @@
 Planar rigid body with coordinates q = [x, z, pitch] (CG displacement from first contact,
 x towards the barrier, z up; pitch nose-down positive) and diagonal mass matrix
 diag(m, m, I). Forces: the hysteretic barrier contact (``sim.contact``), axles and tyres
-(``sim.ground``), the barrier face's friction (``Params.mu_face``), gravity, and the optional mechanisms of ``Params.mechanisms``.
+(``sim.ground``), the wheels' spin held towards rolling by the tyres' grip (``sim.wheels``),
+the barrier face's friction (``Params.mu_face``), gravity, and the optional mechanisms of
+``Params.mechanisms``.
 
 Integration: fixed-step symplectic (semi-implicit) Euler, velocities living at half
 steps (leapfrog: positions are second-order accurate), ``Solver.dt`` substeps inside a
@@ -29,6 +31,7 @@ import jax.numpy as jnp
 from sim.contact import contact_geometry, face_friction_impulse, face_point_jacobian, loading_force, unloading_force
 from sim.errors import ConfigError
 from sim.ground import ground_forces
+from sim.wheels import axle_jacobians, spin_impulses
 from sim.params import Params, validate_params
 from sim.vehicle import Vehicle
 
@@ -70,9 +73,10 @@ class Trajectory(eqx.Module):
     front_margin, rear_margin (N, axle contact margins, negative while the wheel is off
     the ground); front_lift, rear_lift (m, axle height above the wheel-touching height);
     front_blocked (0..1); front_wheel_angle, rear_wheel_angle (rad, forward rolling
-    positive); contact_impulse (N s, of the whole barrier force) and contact_work (J, integral
-    of the structure's F dd: rises while crushing, falls by the energy given back) and
-    energy_absorbed (J, the structure's work on the loading curve), all cumulative from t = 0.
+    positive) and front_wheel_spin, rear_wheel_spin (rad/s, ``sim.wheels``); contact_impulse
+    (N s, of the whole barrier force) and contact_work (J, integral of the structure's F dd:
+    rises while crushing, falls by the energy given back) and energy_absorbed (J, the
+    structure's work on the loading curve), all cumulative from t = 0.
     """
 
     t: jnp.ndarray
@@ -99,6 +103,8 @@ class Trajectory(eqx.Module):
     front_blocked: jnp.ndarray
     front_wheel_angle: jnp.ndarray
     rear_wheel_angle: jnp.ndarray
+    front_wheel_spin: jnp.ndarray
+    rear_wheel_spin: jnp.ndarray
     contact_impulse: jnp.ndarray
     contact_work: jnp.ndarray
     energy_absorbed: jnp.ndarray
@@ -115,6 +121,7 @@ class _State(NamedTuple):
     crush_max: jnp.ndarray  # m
     energy_absorbed: jnp.ndarray  # J
     wheel_angle: jnp.ndarray  # (2,) rad
+    wheel_spin: jnp.ndarray  # (2,) rad/s
     impulse: jnp.ndarray  # N s
     work: jnp.ndarray  # J
     bodies: tuple  # each body mechanism's own state (sim.mechanisms.Mechanism.body_init)
@@ -142,7 +149,7 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     crush, jac = contact_geometry(q, params.dz_contact)
     crush_rate = jac @ v
     blocked = _front_blocked(crush, params, vehicle)
-    other, normal, margin, lift, axle_speed = ground_forces(q, v, vehicle, params, blocked, solver)
+    other, normal, margin, lift = ground_forces(q, v, vehicle, params, blocked, solver)
     body_out = [b.body_forces(s, q, v) for b, s in zip(bodies, state.bodies)]
     body_barrier = sum((f_barrier for _, f_barrier, _ in body_out), jnp.zeros_like(crush))
     other = other + jnp.stack([sum((f for f, _, _ in body_out), jnp.zeros_like(crush)), 0.0 * crush, 0.0 * crush])
@@ -159,6 +166,10 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     force = load_fraction * f_load + (1.0 - load_fraction) * f_unload
 
     v_new = v + dt * (accel_other + force * accel_per_newton)
+    rolling = jnp.stack([1.0 - blocked, jnp.ones_like(blocked)])  # a blocked wheel neither grips nor turns
+    v_new, spin = spin_impulses(v_new, state.wheel_spin, inv_mass, axle_jacobians(q, vehicle), normal,
+                                params.mu_adhesion * rolling, vehicle.wheel_spin_inertia, vehicle.wheel_radius, dt)
+    spin = spin * rolling
     jac_z = face_point_jacobian(q, params.dz_contact, vehicle.cg_to_front_axle + vehicle.front_overhang)
     v_new = v_new + inv_mass * jac_z * face_friction_impulse(v_new, inv_mass, jac_z, force, params.mu_face, dt)
     v_mid = 0.5 * (v + v_new)  # the velocity at the current time (leapfrog)
@@ -168,7 +179,6 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
     f_load_new = loading_force(crush_new, jac_new @ v_new, params, vehicle)
     absorbed = jnp.where(grows, 0.5 * (f_load + f_load_new) * (crush_new - crush), 0.0)
 
-    rolling = jnp.stack([1.0 - blocked, jnp.ones_like(blocked)])
     new_bodies = tuple(b.body_advance(s, out[:2], out[2], q_new, v_new, dt)
                        for b, s, out in zip(bodies, state.bodies, body_out))
     engine = dict(engine_x=q[0], engine_vx=v_mid[0], engine_force=jnp.zeros_like(crush),
@@ -180,7 +190,8 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
         v=v_new,
         crush_max=jnp.maximum(state.crush_max, crush_new),
         energy_absorbed=state.energy_absorbed + absorbed,
-        wheel_angle=state.wheel_angle + dt * rolling * axle_speed / vehicle.wheel_radius,
+        wheel_angle=state.wheel_angle + dt * spin,
+        wheel_spin=spin,
         impulse=state.impulse + dt * (force + body_barrier),
         work=state.work + dt * force * (jac @ v_mid),
         bodies=new_bodies,
@@ -192,6 +203,7 @@ def _step(state: _State, params: Params, vehicle: Vehicle, solver: Solver):
         front_margin=margin[0], rear_margin=margin[1],
         front_lift=lift[0], rear_lift=lift[1], front_blocked=blocked,
         front_wheel_angle=state.wheel_angle[0], rear_wheel_angle=state.wheel_angle[1],
+        front_wheel_spin=state.wheel_spin[0], rear_wheel_spin=state.wheel_spin[1],
         contact_impulse=state.impulse, contact_work=state.work,
         energy_absorbed=state.energy_absorbed,
     )  # fmt: skip
@@ -206,6 +218,7 @@ def _run(params: Params, vehicle: Vehicle, speed, n_out: int, solver: Solver) ->
         crush_max=zero,
         energy_absorbed=zero,
         wheel_angle=jnp.stack([zero, zero]),
+        wheel_spin=jnp.stack([zero, zero]) + speed / vehicle.wheel_radius,
         impulse=zero,
         work=zero,
         bodies=tuple(b.body_init(speed + zero) for b in _bodies(params)),

@@ -29,6 +29,9 @@ GRAVITY = 9.81  # m/s^2
 # frequencies of passenger cars (Gillespie, Fundamentals of Vehicle Dynamics, ch. 6).
 DEFAULT_RIDE_FREQUENCY_HZ = (1.4, 1.6)
 DEFAULT_DAMPING_RATIO = 0.3
+# kg m^2 per wheel: a passenger car's wheel, tyre, hub and brake disc (16-17 inch; a 225/55 R16
+# tyre of 10 kg near the rolling radius and a 9 kg rim make 1.0-1.3 kg m^2). Two per axle.
+DEFAULT_WHEEL_SPIN_INERTIA = 1.1
 
 _POSITIVE_FIELDS = (
     "mass",
@@ -65,6 +68,8 @@ class Vehicle(eqx.Module):
         area (N/m^3) times this gives a stiffness in N/m.
     axle_stiffness : (2,) N/m, front then rear: suspension and tyre in series, per axle.
     axle_damping : (2,) N s/m, front then rear.
+    wheel_spin_inertia : (2,) kg m^2, front then rear: each axle's two wheels about their
+        spin axis (``sim.wheels``; 0: none, as in V-SIM's model).
     silhouette_side : ((x, z), ...) m, side outline, x forward from the rear bumper, z up.
     windscreen_top : (x, z) m, the roof edge at the top of the windscreen, or None.
     engine_mass : kg, the engine and gearbox (the second body of
@@ -85,6 +90,7 @@ class Vehicle(eqx.Module):
     contact_area: jnp.ndarray
     axle_stiffness: jnp.ndarray
     axle_damping: jnp.ndarray
+    wheel_spin_inertia: jnp.ndarray
     key: str = eqx.field(static=True)
     name: str = eqx.field(static=True)
     silhouette_side: tuple = eqx.field(static=True, default=())
@@ -214,6 +220,8 @@ def vehicle_from_dict(d: dict, key: str = "vehicle", source: str = "vehicle") ->
     stiffness = _axle_pair(d, "axle_stiffness", default_k, source)
     default_c = 2 * DEFAULT_DAMPING_RATIO * np.sqrt(stiffness * axle_mass)
     damping = _axle_pair(d, "axle_damping", default_c, source, allow_zero=True)
+    spin_inertia = _axle_pair(d, "wheel_spin_inertia", np.full(2, 2 * DEFAULT_WHEEL_SPIN_INERTIA), source,
+                              allow_zero=True)
 
     silhouette = _polygon(d.get("silhouette_side", ()), source)
     top = d.get("windscreen_top")
@@ -238,6 +246,7 @@ def vehicle_from_dict(d: dict, key: str = "vehicle", source: str = "vehicle") ->
         **{f: jnp.asarray(v, dtype=float) for f, v in values.items()},
         axle_stiffness=jnp.asarray(stiffness, dtype=float),
         axle_damping=jnp.asarray(damping, dtype=float),
+        wheel_spin_inertia=jnp.asarray(spin_inertia, dtype=float),
         key=key,
         name=name,
         silhouette_side=silhouette,

@@ -63,7 +63,10 @@ def test_a_films_scale_error_is_one_nuisance_with_its_measured_prior(a4):
     its wheel angles are not. With the scale's uncertainty (0.5 %) the fit carries the scale
     as one nuisance: the wheels' angles against x find it, and the impact speed and the
     stiffness come back within their standard deviations, the scale's pull reported. Held
-    at 1 (the error taken for none), the speed comes out 0.4 % high, 3 sigmas off."""
+    at 1 (the error taken for none), the lengths and the wheels' angles (whose spin the model
+    follows through the crash) cannot agree: measured 2026-11-28, chi-square 4245 against
+    1558 and x RMS 0.84 mm against 0.31 (before the wheels' spin, the speed took it: 0.4 %
+    high)."""
     m = synthetic_measurement(a4, named_params("paper_identified"), noise=FILM_NOISE, contact_time=0.0004)
     long = {k: v * 1.004 if k in ("x_m", "z_m") else v for k, v in m.channels.items()}
     film = dataclasses.replace(m, channels=long, impact_speed_mps=None, impact_speed_sigma=None,
@@ -76,8 +79,7 @@ def test_a_films_scale_error_is_one_nuisance_with_its_measured_prior(a4):
     assert abs(r.values["k_compression"] - 970e3) < 2 * r.std["k_compression"]
     held = fit(dataclasses.replace(film, length_scale_sigma=None), a4, model_error=NONE)
     assert "length_scale" not in held.values
-    assert held.values["impact_speed"] / speed - 1 == pytest.approx(0.004, abs=0.001)
-    assert abs(held.values["impact_speed"] - speed) > 2.5 * held.std["impact_speed"]
+    assert held.chi2 > 2 * r.chi2 and held.rms["x_m"] > 2 * r.rms["x_m"]
 
 
 def test_fit_rms_is_the_noise_level(paper_fit):

@@ -1,6 +1,7 @@
 """The collision model against a case solved on paper: a car whose barrier force acts
 through its centre of gravity (dz' = 0: no pitch moment) and whose wheels roll without
-resistance is a point mass on the linear loading spring F = k_compression * A * d until
+resistance and without grip (their spin neither slows the car nor is slowed:
+``tests/test_sim_wheels.py`` has the case with grip) is a point mass on the linear loading spring F = k_compression * A * d until
 maximum crush, so
 
     omega = sqrt(k_compression * A / m),  d_max = v0 / omega,  t_max = pi / (2 omega),
@@ -23,7 +24,8 @@ V0 = 56.0 / 3.6
 
 @pytest.fixture(scope="module")
 def point_mass_run(a4):
-    params = dataclasses.replace(named_params("paper_identified"), dz_contact=0.0, rolling_resistance=0.0)
+    params = dataclasses.replace(named_params("paper_identified"), dz_contact=0.0, rolling_resistance=0.0,
+                                 mu_adhesion=0.0)
     traj = simulate(params, a4, V0)
     omega = math.sqrt(float(params.k_compression) * float(a4.contact_area) / float(a4.mass))
     return params, traj, omega
@@ -55,7 +57,8 @@ def wide_face_run(a4):
     import equinox as eqx
 
     vehicle = eqx.tree_at(lambda v: v.contact_area, a4, 2.0)
-    params = dataclasses.replace(named_params("paper_identified"), dz_contact=0.0, rolling_resistance=0.0)
+    params = dataclasses.replace(named_params("paper_identified"), dz_contact=0.0, rolling_resistance=0.0,
+                                 mu_adhesion=0.0)
     return params, vehicle, simulate(params, vehicle, V0)
 
 

@@ -52,6 +52,8 @@ def test_named_parameter_sets_are_the_papers_table_1():
         ({"cg_to_front_axle": 3.0}, "cg_to_front_axle"),
         ({"axle_stiffness": [95000.0]}, "axle_stiffness"),
         ({"axle_damping": [-1.0, 5000.0]}, "axle_damping"),
+        ({"wheel_spin_inertia": [2.2, -0.1]}, "wheel_spin_inertia"),
+        ({"wheel_spin_inertia": 2.2}, "wheel_spin_inertia"),
         ({"wheel_radius": math.nan}, "wheel_radius"),
     ],
 )
@@ -74,6 +76,15 @@ def test_missing_vehicle_field_is_named(tmp_path):
 def test_unknown_vehicle_lists_known_ones():
     with pytest.raises(ConfigError, match="unknown vehicle 'audi_a5'.*audi_a4"):
         load_vehicle("audi_a5")
+
+
+def test_wheel_spin_inertia_is_the_files_or_a_passenger_cars_wheels():
+    """Two wheels of 1.1 kg m^2 an axle unless the file says (data/README.md); 0 is V-SIM's."""
+    d = a4_dict()
+    d.pop("wheel_spin_inertia", None)
+    np.testing.assert_allclose(np.asarray(vehicle_from_dict(d).wheel_spin_inertia), [2.2, 2.2])
+    np.testing.assert_allclose(np.asarray(vehicle_from_dict({**d, "wheel_spin_inertia": [3.0, 0.0]}).wheel_spin_inertia),
+                               [3.0, 0.0])
 
 
 def test_optional_suspension_defaults_follow_ride_frequency():

@@ -13,12 +13,13 @@ import pytest
 from sim import Solver, named_params
 from sim.ground import ground_forces
 from sim.vehicle import GRAVITY
+from sim.wheels import axle_jacobians
 
 PARAMS = named_params("paper_identified")
 
 
 def axles(a4, q, v):
-    force, normal, margin, _, _ = ground_forces(jnp.asarray(q, dtype=float), jnp.asarray(v, dtype=float), a4, PARAMS,
+    force, normal, margin, _ = ground_forces(jnp.asarray(q, dtype=float), jnp.asarray(v, dtype=float), a4, PARAMS,
                                                 jnp.asarray(0.0), Solver())
     return np.asarray(force), np.asarray(normal)
 
@@ -99,8 +100,9 @@ def test_axle_geometry_and_the_virtual_work_of_the_one_axle_on_the_ground(a4, li
     theta = 0.08 if lifted == 1 else -0.08  # nose down lifts the rear, nose up the front
     q = np.array([0.3, 0.02, theta])
     v = np.array([6.0, 0.4, 3.0 if lifted == 1 else -3.0])
-    force, normal, margin, lift, axle_speed = (np.asarray(o) for o in ground_forces(
+    force, normal, margin, lift = (np.asarray(o) for o in ground_forces(
         jnp.asarray(q), jnp.asarray(v), a4, PARAMS, jnp.asarray(1.0), Solver()))
+    axle_speed = np.asarray(axle_jacobians(jnp.asarray(q), a4)) @ v  # the wheels' spin rolls against it (sim.wheels)
     a, b = float(a4.cg_to_front_axle), float(a4.cg_to_rear_axle)
     h, r = float(a4.cg_height), float(a4.wheel_radius)
     k, c = np.asarray(a4.axle_stiffness), np.asarray(a4.axle_damping)

@@ -49,7 +49,7 @@ def test_event_times_match_events_ms(blocked_run, outputs_jit):
     assert np.isnan(out["rear_wheel_touchdown_time"])  # lands at ~600 ms, after the 200 ms span
 
 
-def test_max_crush_and_its_time_match_a_finely_sampled_run(a4):
+def test_max_crush_and_its_time_match_a_finely_sampled_run(a4_vsim):
     # the same run sampled every 0.2 ms (every integration step) against the 1 ms samples:
     # the loading-side vertex is unbiased (a parabola across the kink is off by ~0.4 ms)
     import dataclasses as dc
@@ -58,8 +58,8 @@ def test_max_crush_and_its_time_match_a_finely_sampled_run(a4):
     from sim.simulate import _run_jit
 
     params = dc.replace(named_params("paper_identified"), k_compression=jnp.asarray(950e3))
-    coarse = _run_jit(params, a4, PAPER_SPEED, 81, Solver())
-    fine = _run_jit(params, a4, PAPER_SPEED, 401, Solver(output_dt=2e-4))
+    coarse = _run_jit(params, a4_vsim, PAPER_SPEED, 81, Solver())
+    fine = _run_jit(params, a4_vsim, PAPER_SPEED, 401, Solver(output_dt=2e-4))
     assert float(time_of_max_crush(coarse)) == pytest.approx(float(time_of_max_crush(fine)), abs=2e-6)
     assert float(max_crush(coarse)) == pytest.approx(float(max_crush(fine)), abs=2e-6)
     crush = np.asarray(coarse.crush)

@@ -1,14 +1,17 @@
 """Wheels that spin on: a film's hub angle running ahead of the car's travel.
 
-The model's wheels roll (angle = travel / radius) until something blocks them. A real wheel
-has spin inertia and grips the floor through friction only: when the car decelerates at
-30 g, its wheels cannot follow and turn on, slipping (on a reference-world film the rear
-wheel turned 2 rad beyond the car's travel and was still turning forwards 100 ms after the
-car had started back). Fitting those samples drags every parameter towards the one
-behaviour the model cannot show: there the fit did not converge at all. So a wheel channel
-is fitted only until its angle runs ahead of rolling (by ``SPIN_ON_RAD`` and 3 of its
-sigmas); what follows is left out with a note. Falling behind (a wheel that stops: blocking)
-is what the front-wheel-block candidate looks for, and is kept.
+A real wheel has spin inertia and grips the floor through friction only: when the car
+decelerates at 30 g, its wheels cannot follow and turn on, slipping (on a reference-world
+film the rear wheel turned 2 rad beyond the car's travel and was still turning forwards
+100 ms after the car had started back). The model's wheels spin too (``sim.wheels``), but
+its grip is one coefficient, not a tyre's slip curve, and how far a slipping wheel runs
+ahead is that curve's detail: fitted, those samples drag the parameters towards it (before
+the model had the spin, the fit did not converge at all on such a film; with it, on
+development film 960001, the film's scale ran to its bound and the speed 5 % off). So a
+wheel channel is fitted only until its angle runs ahead of rolling (by ``SPIN_ON_RAD`` and 3
+of its sigmas); what follows is left out with a note (``Measurement.fitted_until_ms``).
+Falling behind (a wheel that stops: blocking) is what the front-wheel-block candidate looks
+for, and is kept.
 """
 
 from __future__ import annotations
@@ -70,7 +73,7 @@ def without_spinning_wheels(measurement, wheel_radius: float):
     m = measurement
     if not m.measures_position:
         return m
-    sigma, notes = dict(m.sigma), list(m.notes)
+    sigma, notes, until = dict(m.sigma), list(m.notes), dict(m.fitted_until_ms)
     changed = False
     for name in WHEEL_CHANNELS:
         if name not in m.channels:
@@ -83,11 +86,12 @@ def without_spinning_wheels(measurement, wheel_radius: float):
         lead = np.nanmax(np.where(cut & np.isfinite(m.sigma[name]),
                                   lead_over_rolling(m.t, m.channels[name], x, wheel_radius), np.nan))
         sigma[name] = np.where(cut, np.nan, m.sigma[name])
+        until[name] = onset * 1e3
         changed = True
         wheel = name.split("_")[0]
         notes.append(f"the {wheel} wheel turns on ahead of the car's travel from {onset * 1e3:.1f} ms (up to "
-                     f"{lead:.2f} rad more than rolling): it spins on, slipping, which the model's rolling wheels "
-                     f"cannot do, so its angle is fitted only until then")
+                     f"{lead:.2f} rad more than rolling): it spins on, slipping, as far as a tyre's slip curve lets it, "
+                     f"which the model's one grip coefficient does not follow, so its angle is fitted only until then")
     if not changed:
         return m
-    return dataclasses.replace(m, sigma=sigma, notes=tuple(notes))
+    return dataclasses.replace(m, sigma=sigma, notes=tuple(notes), fitted_until_ms=until)

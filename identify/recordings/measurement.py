@@ -79,6 +79,9 @@ class Measurement:
         from ``vx_mps``), as their errors are not independent of their source's; or left out
         of the fit for a stated reason (a measured engine the cabin's motion does not bear
         out as a second body, ``identify.identification``).
+    fitted_until_ms : channel -> ms after contact: the channel is fitted only up to then, its
+        samples after it left out (sigma NaN) with a note (a wheel spinning on ahead of
+        rolling, ``identify.fitting.wheel_spin``); result.json's ``fit.fitted_until_ms``.
     """
 
     t: np.ndarray
@@ -93,6 +96,7 @@ class Measurement:
     events_ms: dict[str, float] = dataclasses.field(default_factory=dict)
     notes: tuple[str, ...] = ()
     derived: tuple[str, ...] = ()
+    fitted_until_ms: dict[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         t = np.asarray(self.t, dtype=float)
