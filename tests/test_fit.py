@@ -322,9 +322,10 @@ def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pull
     # a contact measured 4.7 ms after t = 0 (a film's sub-frame contact seen in the picture)
     # is where the prior sits: the same motion then agrees with it
     # a table that cannot weigh the channels' contact (a sensor recording's): the measured contact
-    # stays a prior, which the motion outweighs (4.26 ms measured)
+    # stays a prior, which the motion outweighs (4.86 ms measured; 4.26 before the model had the
+    # wheels' spin, whose angles now say more of the contact): near the channels' own, as above
     prior = fit(off, a4, model_error=NONE, options=FitOptions(starts=1)).pulls()["contact_time"]
-    assert "held" not in prior and 0.004 < prior["value"] < 0.0045 and prior["conflict"]
+    assert "held" not in prior and 0.004 < prior["value"] < 0.0055 and prior["conflict"]
     seen = fit(dataclasses.replace(off, contact_time_s=0.0047), a4, model_error=contact_only)
     pull = seen.pulls()["contact_time"]
     assert pull["prior"] == 0.0047 and not pull["conflict"] and abs(pull["pull"]) < 1.0
