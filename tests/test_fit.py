@@ -295,7 +295,8 @@ def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pull
     r = fit(off, a4, model_error=contact_only)
     pull = r.pulls()["contact_time"]
     assert pull["held"] and pull["prior"] == 0.0 and pull["prior_std"] == 0.001
-    # the channels alone put it 4.47 ms late (measured); a start at the measured contact alone stays there
+    # the channels alone put it 4.47 ms late (measured; 4.32 ms with the wheels' spin, and 5.04 ms
+    # from a start at 4.7 ms: two basins); a start at the measured contact alone stays there
     assert 0.004 < pull["value"] < 0.0055
     assert pull["conflict"] and pull["pull"] == pytest.approx(pull["value"] / np.hypot(0.001, pull["std"]))
     assert pull["std"] == pytest.approx(pull["std_data"])
@@ -330,7 +331,9 @@ def test_a_measured_contact_is_held_and_the_measured_speed_is_a_prior_their_pull
     pull = seen.pulls()["contact_time"]
     assert pull["prior"] == 0.0047 and not pull["conflict"] and abs(pull["pull"]) < 1.0
     assert seen.values["contact_time"] == pytest.approx(seen.pulls()["contact_time"]["held_at"], abs=1e-9)
-    assert abs(seen.values["contact_time"] - 0.0047) < 0.0001
+    # held where the two combine, within half the measurement's sigma of it: 5.11 ms measured
+    # (the model with the wheels' spin puts the true 5.0 ms a little later than 4.7; 4.70 before)
+    assert abs(seen.values["contact_time"] - 0.0047) < 0.0005
     # the contact's sigma is carried into the parameters that depend on it
     i, k = seen.names.index("contact_time"), seen.names.index("k_compression")
     assert abs(seen.correlation[i, k]) > 0.5
