@@ -62,6 +62,7 @@ def test_a_wheel_turning_on_after_the_car_stops_is_cut_where_it_began_to_lead():
     assert np.array_equal(out.sigma["front_wheel_angle_rad"], m.sigma["front_wheel_angle_rad"])
     assert any("rear wheel turns on ahead" in n for n in out.notes)
     assert out.channels is m.channels  # the samples stay; only their weight goes
+    assert out.fitted_until_ms == {"rear_wheel_angle_rad": pytest.approx(1e3 * onset)}  # result.json says where
 
 
 def test_a_recording_whose_position_is_derived_is_left_alone():
