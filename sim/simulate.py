@@ -224,12 +224,22 @@ def _run(params: Params, vehicle: Vehicle, speed, n_out: int, solver: Solver) ->
         bodies=tuple(b.body_init(speed + zero) for b in _bodies(params)),
     )
     substeps = solver.substeps
+    # the step's code appears once in the program: each output sample runs all its substeps
+    # through one scan and keeps the first one's observations (unrolling that first step
+    # doubled the program XLA compiles, most of a fit's first run)
+    shapes = jax.eval_shape(lambda s: _step(s, params, vehicle, solver)[1], state)
+    nothing = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), shapes)
+
+    def substep(carry, first):
+        state, kept = carry
+        state, observed = _step(state, params, vehicle, solver)
+        kept = jax.tree.map(lambda k, o: jnp.where(first, o, k), kept, observed)
+        return (state, kept), None
+
+    firsts = jnp.arange(substeps) == 0
 
     def sample(state, _):
-        state, observed = _step(state, params, vehicle, solver)
-        state, _ = jax.lax.scan(
-            lambda s, _: (_step(s, params, vehicle, solver)[0], None), state, None, length=substeps - 1
-        )
+        (state, observed), _ = jax.lax.scan(substep, (state, nothing), firsts)
         return state, observed
 
     _, observed = jax.lax.scan(sample, state, None, length=n_out)
