@@ -23,7 +23,7 @@ os.environ["IDENTIFY_NO_COMPILE_CACHE"] = "1"
 
 
 # files whose tests compile the same programs (the same recording, model and fit settings: a
-# compile is most of a fit, ~35-55 s against ~1 s of solving): one worker runs them all, so
+# compile is most of a fit, ~17-25 s against ~1 s of solving): one worker runs them all, so
 # only the first compiles
 SHARED_COMPILES = {
     "test_end_to_end.py": "the sample film", "test_bad_input.py": "the sample film",
