@@ -197,6 +197,28 @@ def test_a_fit_that_does_not_converge_is_one_clear_error(a4, paper_measurement, 
         fit(paper_measurement, a4, options=FitOptions(starts=1))
 
 
+def test_a_solves_cost_is_the_sum_of_squares_at_the_point_it_returns(a4, paper_measurement, monkeypatch):
+    """The cost the starts are ranked by is read from the solver's state (its last accepted
+    point's residuals), not simulated again: it must be the residuals' sum of squares at the
+    point returned."""
+    import identify.fitting.collision_fit as collision_fit
+    from identify.fitting.collision_fit import FitOptions
+
+    real, seen = collision_fit._solve_jit, []
+
+    def checked(spec, channels, n_out, options, data, u0):
+        u, cost, ok = real(spec, channels, n_out, options, data, u0)
+        r = collision_fit._finish_jit(spec, channels, n_out, options, data, u)[0]
+        seen.append((float(cost), float(np.sum(np.square(r)))))
+        return u, cost, ok
+
+    monkeypatch.setattr(collision_fit, "_solve_jit", checked)
+    fit(paper_measurement, a4, model_error=NONE, options=FitOptions(starts=2))
+    assert len(seen) >= 2
+    for cost, at_u in seen:
+        assert cost == pytest.approx(at_u, rel=1e-9)
+
+
 @pytest.mark.parametrize("transform, kw, value, words", [
     ("logit", {"lower": 0.05, "upper": 1.2}, 0.0511, "at its lower bound 0.05"),
     ("logit", {"lower": 0.05, "upper": 1.2}, 1.19, "at its upper bound 1.2"),

@@ -374,11 +374,13 @@ def _forward_jacobian(fn):
 
 
 def _solve(spec, channels, n_out, options, data, u0):
-    """One Levenberg-Marquardt run from ``u0``: (u, cost, converged)."""
+    """One Levenberg-Marquardt run from ``u0``: (u, cost, converged). The cost is the
+    residuals the solver holds for its last accepted point, which ``sol.value`` is (optimistix'
+    Gauss-Newton state keeps them together), not a simulation run once more."""
     fn = _forward_jacobian(_residual_fn(spec, channels, n_out, options.solver))
     solver = optx.LevenbergMarquardt(rtol=options.rtol, atol=options.atol)
     sol = optx.least_squares(fn, solver, u0, args=data, max_steps=options.max_steps, throw=False)
-    r = fn(sol.value, data)
+    r = sol.state.f_info.residual
     return sol.value, jnp.sum(r * r), sol.result == optx.RESULTS.successful
 
 
