@@ -70,8 +70,7 @@ def test_each_shipped_table_names_its_calibration_worlds_and_only_parameters_the
              | {CONTACT_FROM_MOTION})  # the error of where the fitted channels alone put a measured contact
     t = table(kind)
     assert set(t.relative) | set(t.absolute) <= known
-    # measured (its term may be 0: the film's, where the data's own stds cover the errors)
-    assert "k_compression" in t.relative and doc["measured"]["k_compression"]["worlds"] >= 16
+    assert t.relative["k_compression"] > 0
 
 
 def test_a_recording_of_positions_takes_the_film_table_one_of_accelerations_the_sensors_table():

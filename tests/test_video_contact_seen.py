@@ -300,18 +300,17 @@ def test_a_pose_lost_in_the_backgrounds_frames_is_carried_from_the_approach():
 
 def test_settling_the_contact_prefers_the_picture_unless_the_motion_disagrees():
     seen = SeenContact("seen", 0.0200, 0.0005, 100.0, 0.2, "first contact seen at 20.00 +- 0.50 ms")
-    tc, sig, source, note = settle_contact(0.0210, seen)
-    assert (tc, sig, source) == (0.0200, 0.0005, "picture") and "disagree" not in note
-    near = 0.0200 + 3.8 * np.hypot(0.0005, ONSET_SIGMA_S)
-    tc, sig, source, note = settle_contact(near, seen)
-    assert (tc, sig, source) == (0.0200, 0.0005, "picture") and "disagree" not in note
+    tc, sig, note = settle_contact(0.0210, seen)
+    assert (tc, sig) == (0.0200, 0.0005) and "disagree" not in note
+    near = 0.0200 + 2.8 * np.hypot(0.0005, ONSET_SIGMA_S)
+    tc, sig, note = settle_contact(near, seen)
+    assert (tc, sig) == (0.0200, 0.0005) and "disagree" not in note
     # development film 960042: a stop seen 21 ms before the onset is no measurement of the contact
-    late = 0.0200 + 4.2 * np.hypot(0.0005, ONSET_SIGMA_S)
-    tc, sig, source, note = settle_contact(late, seen)
-    assert (tc, sig, source) == (late, None, "deceleration onset") and "disagree" in note and "no sigma" in note
-    # nothing seen: the onset is the measurement, with its error on the calibration films
-    tc, sig, source, note = settle_contact(0.0210, not_seen("too dark"))
-    assert (tc, sig, source) == (0.0210, ONSET_SIGMA_S, "deceleration onset") and "onset alone, +- 1.7 ms" in note
+    late = 0.0200 + 3.2 * np.hypot(0.0005, ONSET_SIGMA_S)
+    tc, sig, note = settle_contact(late, seen)
+    assert (tc, sig) == (late, None) and "disagree" in note and "no sigma" in note
+    tc, sig, note = settle_contact(0.0210, not_seen("too dark"))
+    assert (tc, sig) == (0.0210, None) and "onset alone" in note
 
 
 def test_a_front_end_at_the_pictures_border_is_not_taken_for_the_front():
@@ -550,7 +549,7 @@ def test_a_tip_crossing_before_the_frames_followed_is_not_made_up():
 def test_a_film_whose_cg_is_not_located_says_its_contact_was_not_looked_for_in_the_picture():
     """The nose is placed from the CG; a film with no hub targets and no fitted outline has
     none (reference world 960493), so the contact comes from the deceleration onset alone,
-    with the onset's sigma, and the notes say why the picture was not asked (it had been silent)."""
+    without a sigma, and the notes say why the picture was not asked (it had been silent)."""
     from video.follow import TrackerConfig
     from video.track import _contact, _Pose
 
@@ -561,10 +560,9 @@ def test_a_film_whose_cg_is_not_located_says_its_contact_was_not_looked_for_in_t
     pose = _Pose(pose=None, XZ=np.column_stack([x, np.zeros_like(x)]), axes=np.eye(2), pitch=np.zeros_like(x),
                  pos_sig=sig, frame_t=t, onset_guess_s=0.03)
     notes = []
-    tc, tc_sigma, source, cf, _ = _contact(None, pose, [], np.zeros(2), None, None, 1e-3, 1, None, None, FPS,
-                                           len(t), TrackerConfig(), notes)
-    assert (tc_sigma, source) == (ONSET_SIGMA_S, "deceleration onset")
-    assert tc == pytest.approx(tc_true, abs=1e-3) and abs(cf - tc_true * FPS) < 1.0
+    tc, tc_sigma, cf, _ = _contact(None, pose, [], np.zeros(2), None, None, 1e-3, 1, None, None, FPS, len(t),
+                                   TrackerConfig(), notes)
+    assert tc_sigma is None and tc == pytest.approx(tc_true, abs=1e-3) and abs(cf - tc_true * FPS) < 1.0
     said = [n for n in notes if n.startswith("first contact not seen in the picture: not looked for")]
     assert len(said) == 1 and "the CG is not located" in said[0] and "deceleration onset alone" in said[0], notes
 

@@ -744,8 +744,8 @@ def _shake_along_x(stab, d: int, s: float, axes=None) -> np.ndarray | None:
 def _contact(film, p: _Pose, dropped, cg_uv, cg_src, car, s, d, lens, stab, fps, n,
              config: TrackerConfig, notes: list):
     """First contact: the deceleration onset, replaced by the contact seen in the picture
-    when it is seen (``video.contact_seen.settle_contact``). Returns (time s from frame 0, its
-    sigma or None, what it came from, the contact frame, the x series the onset was fitted on)."""
+    when it is seen. Returns (time s from frame 0, its sigma or None, the contact frame,
+    the x series the onset was fitted on)."""
     from video.motion import contact_time
 
     # a repeated frame before contact may have shifted the frames after it by one
@@ -761,20 +761,20 @@ def _contact(film, p: _Pose, dropped, cg_uv, cg_src, car, s, d, lens, stab, fps,
         x_fit = p.XZ[:, 0]
         tc, how = contact_time(p.frame_t, x_fit, p.pos_sig, fps, shake=shake)
     notes.append(f"{how}: {tc * 1e3:.2f} ms after frame 0")
-    if not config.see_contact:
-        seen = not_seen("not looked for (TrackerConfig.see_contact off)")
-    elif cg_src:
-        seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, p.axes, car, s, d, tc, lens, stab)
-    else:  # the nose is placed from the CG: without one it is not looked for, and said
-        seen = not_seen("not looked for: the CG is not located (no hub targets, no fitted silhouette), so the"
-                        " nose cannot be placed")
-    tc, tc_sigma, source, note = settle_contact(tc, seen)
-    notes.append(note)
+    seen = None
+    if config.see_contact:  # the nose is placed from the CG: without one it is not looked for, and said
+        seen = _contact_in_picture(film, p.frame_t, p.pose, cg_uv, p.axes, car, s, d, tc, lens, stab) if cg_src \
+            else not_seen("not looked for: the CG is not located (no hub targets, no fitted silhouette), so the"
+                          " nose cannot be placed")
+    tc_sigma = None
+    if seen is not None:
+        tc, tc_sigma, note = settle_contact(tc, seen)
+        notes.append(note)
     # first frame at or after the contact; a contact within 0.2 frame after a frame is
     # taken as that frame (the onset fit's precision: frame-aligned contacts stay put)
     cf = min(max(int(np.ceil(tc * fps - 0.2)), 1), n - 1)
     notes.append(f"contact frame {cf}")
-    return tc, tc_sigma, source, cf, x_fit
+    return tc, tc_sigma, cf, x_fit
 
 
 def _speed(p: _Pose, x_fit, cf: int, s: float, s_sig: float, speed_mps, notes: list) -> float:
@@ -898,8 +898,8 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     s, s_sig = est.m_per_px, est.sigma
     cg_uv, cg_src, sil = _cg(film, uv, tt, roles, ref, car, est, notes)
     p = _pose(uv, sigma_px, roles.body, cg_uv, ref, d, s, fps, notes, dropped, stab)
-    tc, tc_sigma, tc_source, cf, x_fit = _contact(film, p, dropped, cg_uv, cg_src, car, s, d, lens, stab,
-                                                  fps, n, config, notes)
+    tc, tc_sigma, cf, x_fit = _contact(film, p, dropped, cg_uv, cg_src, car, s, d, lens, stab,
+                                       fps, n, config, notes)
     p, x_fit = _take_out_shake_left(p, x_fit, tc, stab, d, s, notes)
     v_imp = _speed(p, x_fit, cf, s, s_sig, speed_mps, notes)
     channels, sigma = _channels(p, x_fit, tc, cf, s, fps, car, notes)
@@ -925,8 +925,7 @@ def track_film(film, car: CarGeometry, tape_segment_m: float = 0.1,
     return Tracks(t=t, channels=channels, sigma=sigma, events_ms=events, events_sigma_ms=events_sigma, contact_frame=cf,
                   fps=fps, scale_m_per_px=float(s), scale_sigma=float(s_sig),
                   impact_speed_mps=v_imp, direction=int(d), notes=notes,
-                  contact_offset_s=float(tc - cf / fps), contact_sigma_s=tc_sigma, contact_source=tc_source,
-                  overlay=overlay,
+                  contact_offset_s=float(tc - cf / fps), contact_sigma_s=tc_sigma, overlay=overlay,
                   geometry=_measured_geometry(uv, tt.sigma_px, kf, kr, cf, s, s_sig, sil, car,
                                               hubs_measure=bool(est.tapes)),
                   scale_source=est.source)

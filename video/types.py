@@ -98,12 +98,9 @@ class Tracks:
         in about (-1/fps, 0]: the sub-frame contact time, for comparing with a model
         whose clock starts at the contact instant.
     contact_sigma_s : float or None
-        One-sigma of the contact instant, s: the picture's when it shows it (the front end
-        seen stopping at the barrier face, :mod:`video.contact_seen`), else the deceleration
-        onset's error on the calibration films (``video.contact_seen.ONSET_SIGMA_S``); None
-        when the picture and the onset disagree (neither is then a measurement).
-    contact_source : str
-        What the contact instant came from: ``"picture"`` or ``"deceleration onset"``.
+        One-sigma of the contact instant when the picture shows it (the front end seen
+        stopping at the barrier face, :mod:`video.contact_seen`), s; None when it comes
+        from the deceleration onset of the measured motion itself.
     overlay : dict
         What the tracking report draws on the reference frame, px: ``frame`` (index),
         ``tapes`` (list of (2, 2) end points), ``targets_uv`` (K, 2), ``target_kinds``
@@ -133,7 +130,6 @@ class Tracks:
     notes: list = field(default_factory=list)
     contact_offset_s: float = 0.0
     contact_sigma_s: float | None = None
-    contact_source: str = "deceleration onset"
     overlay: dict = field(default_factory=dict)
     geometry: dict = field(default_factory=dict)
     scale_source: str = "checker tape"

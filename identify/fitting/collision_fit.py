@@ -110,8 +110,8 @@ class FitOptions:
         (``mu_face``); off, it is V-SIM's 0. Off by default: with it, discovery's rules (set on
         the frictionless model, whose heave misfit hid the rest) named physics on 15 of 19 clean
         calibration films (README, "How the fit works").
-    hold_measured_contact : a first contact the recording measured (seen in the film, a
-        film's deceleration onset, the load cells' onset) is held, not fitted: a measured
+    hold_measured_contact : a first contact the recording measured apart from the fitted
+        channels (seen in the film, the load cells' onset) is held, not fitted: a measured
         fact, not a knob (:func:`fit`), where the model-error table has measured how far the
         channels' own contact can be off (``CONTACT_FROM_MOTION``: a film's). Otherwise, and
         off, it is a prior of the fit.
@@ -636,11 +636,9 @@ def fit(
     unknown = sorted(set(held) - {p.name for p in free})
     if unknown:
         raise ValueError(f"held parameter {unknown[0]!r} is not in free")
-    # a measured first contact (seen in the film, the load cells' onset; a film's deceleration
-    # onset, a model-free estimate with its error on calibration films where the picture did not
-    # show it: video.contact_seen.settle_contact) is a measurement, not a knob: held, not
-    # fitted, its sigma carried into the others' covariance
-    # (least_squares.held_at_measurement). As a prior it was outweighed by
+    # a first contact measured apart from the fitted channels (seen in the film, the load
+    # cells' onset) is a measurement, not a knob: held, not fitted, its sigma carried into the
+    # others' covariance (least_squares.held_at_measurement). As a prior it was outweighed by
     # the motion's thousands of samples: on the 10 clean scored films whose seen contact was
     # within 0.2 ms of the truth, the fit moved it 0.41 ms later on average (up to 1.57 ms) and
     # k_compression followed it, 5 % per ms. Held only where the model-error table has measured

@@ -48,10 +48,8 @@ def measurement_from_tracks(tracks, source: str) -> Measurement:
     """The fit's view of a film's tracks: the known channels with their sigmas; the
     measured impact speed rides along (its uncertainty comes from the approach frames,
     which the fit sees itself, so it enters without a prior); first contact enters as a
-    measurement with the sigma the video stage gave it: the picture's (the front end
-    stopping at the barrier, apart from the fitted motion), or the deceleration onset's
-    error on the calibration films (``video.contact_seen.settle_contact``); not at all where
-    the two disagreed. The
+    measurement when the picture showed it (the front end stopping at the barrier, apart
+    from the fitted motion), not when it came from the motion's deceleration onset. The
     scale's uncertainty is one error common to every length (``Measurement.length_scale_sigma``),
     the length channels' sigmas their noise alone."""
     channels = {k: np.asarray(v, float) for k, v in tracks.channels.items() if k in KNOWN_CHANNELS}
