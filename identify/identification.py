@@ -16,6 +16,7 @@ from identify.errors import UserError
 from identify.fitting.collision_fit import FitOptions, FitResult
 from identify.fitting.model import NUISANCE
 from identify.recordings.load import Recording, load_recording
+from identify.report.markdown import held_where
 from identify.report.results import ResultsFolder, default_output_folder as default_output_folder
 
 COLLISION_PARAMETERS = ("k_compression", "k_restitution", "restitution", "dz_contact")
@@ -493,7 +494,7 @@ def fit_warnings(fr) -> list[str]:
         elif p["conflict"] and p.get("held"):
             out.append(f"{name}: the fitted channels alone put it at {p['value']:.4g} +- {p['std']:.2g} {p['unit']},"
                        f" {p['pull']:+.1f} sigma from where the recording measured it ({p['prior']:.4g} +-"
-                       f" {p['prior_std']:.2g}): the model and the recording disagree there; held at the two combined,"
+                       f" {p['prior_std']:.2g}): the model and the recording disagree there; {held_where(p)},"
                        f" {p['held_at']:.4g} +- {p['held_std']:.2g}")
         elif p["conflict"]:
             out.append(f"{name} fitted at {p['value']:.4g} is {p['pull']:+.1f} sigma from what was known before"

@@ -300,3 +300,27 @@ def test_a_held_measurement_carries_its_sigma_into_the_others_as_monte_carlo_fin
     np.testing.assert_allclose(exact.cov[:2, :2], alone.cov, rtol=1e-8)
     assert unc.dof == alone.dof
 
+
+
+def test_two_values_held_together_carry_both_sigmas_as_the_linear_algebra_gives():
+    # independent reference: a linear least squares with two columns held at noisy measurements,
+    # the others' covariance (J_o^T J_o)^-1 + A S A^T, A = (J_o^T J_o)^-1 J_o^T J_h (unit noise)
+    rng = np.random.default_rng(5)
+    jac = rng.normal(size=(60, 4))
+    jac[:, 3] += 0.8 * jac[:, 0]  # held columns correlated with the fitted ones
+    jac[:, 2] += 0.5 * jac[:, 1]
+    r = rng.normal(size=60)
+    full = parameter_covariance(r, jac, np.ones(4), np.ones(4), {}, 10 * len(r))
+    sigmas = np.array([0.2, 0.05])
+    held = held_at_measurement(full, [2, 3], sigmas)
+    j_o, j_h = jac[:, :2], jac[:, 2:]
+    inv = np.linalg.inv(j_o.T @ j_o) * full.cov[0, 0] / np.linalg.inv(jac.T @ jac)[0, 0]  # the fit's noise scale
+    a = np.linalg.inv(j_o.T @ j_o) @ j_o.T @ j_h
+    np.testing.assert_allclose(held.cov[:2, :2], inv + a @ np.diag(sigmas**2) @ a.T, rtol=1e-9)
+    np.testing.assert_allclose(held.std[2:], sigmas, rtol=1e-12)
+    # the held values' covariance with the others: each its shift per unit times its sigma^2
+    np.testing.assert_allclose(held.cov[:2, 2:], -a * sigmas**2, rtol=1e-9)
+    assert held.dof == full.dof + 2
+    # holding them one after the other is not the same (the second reads the first's noise as data)
+    one_by_one = held_at_measurement(held_at_measurement(full, 2, sigmas[0]), 3, sigmas[1])
+    assert not np.allclose(one_by_one.cov[:2, :2], held.cov[:2, :2], rtol=1e-3)

@@ -121,6 +121,15 @@ class FitOptions:
         own error, ``CONTACT_FROM_MOTION``), reported in ``FitResult.held_measured`` and
         ``FitResult.pulls``; off, it is held where it was measured (the fits after the base
         one, whose measured contact is where the base fit held it).
+    hold_measured_scale : a film's scale (its tape, or its hub targets and the wheelbase) is
+        held at its measurement, its sigma carried into the others' covariance, not fitted:
+        the approach frames fix speed times scale, so the fit could move the scale only by
+        what the model makes of the crash, trading it against what the model cannot explain
+        (development films 960007, 960008, 960017: the scale at its 5 % bound, 7.9 to 90
+        sigma from the measurement; held, 960008's x RMS 8.4 -> 1.7 mm and k_compression
+        +11.1 -> -0.2 %, 960007's speed +3.6 -> +0.5 %). Where the fitted channels alone would
+        put it is reported beside it (``FitResult.held_measured``, ``FitResult.pulls``). Off,
+        it is a nuisance of the fit with the measurement as its prior.
     """
 
     starts: int = 5
@@ -133,6 +142,7 @@ class FitOptions:
     face_friction: bool = False
     hold_measured_contact: bool = True
     contact_from_motion: bool = True
+    hold_measured_scale: bool = True
 
 
 @dataclasses.dataclass
@@ -438,27 +448,38 @@ def approach_tau_floor(groups) -> dict[str, str]:
     return {g: g[: -len(BEFORE_CONTACT)] for g in groups if g.endswith(BEFORE_CONTACT)}
 
 
-def _contact_from_motion(spec, channels, n_out, options, data, u, i_c: int):
-    """The fit continued from the held fit's optimum ``u`` with the contact (``spec[i_c]``)
-    free and no prior on it (``data``: its mask 1, its prior weight 0, the fit's weights), from
-    the held contact and ``MOTION_CONTACT_STARTS_S`` either side: the channels may have a
-    second basin some milliseconds away (a contact held 5 ms early was a local optimum of its
-    own, chi-square 17 % above the true one). Returns (u, cost) of the lowest."""
-    seen = float(spec[i_c].to_physical(u[i_c]))
-    best = (u, np.inf)
-    for shift in MOTION_CONTACT_STARTS_S:
-        u0 = u.at[i_c].set(spec[i_c].to_unconstrained(seen + shift))
-        u1, cost, _ = _solve_jit(spec, channels, n_out, options, data, u0)
-        if float(cost) < best[1]:
-            best = (u1, float(cost))
-    return best
+def _estimate_from_channels(spec, channels, n_out, options, data, weights, u, i: int, held: dict, starts,
+                            groups, n_res: int, per_channel: bool):
+    """Where the fitted channels alone put the held quantity ``spec[i]``: the fit continued
+    from the held fit's optimum ``u`` in ``weights`` with it free and no prior on it
+    (``data``: the fit's, its mask 1 and its prior weight 0), from its held value plus each of
+    ``starts`` (its unit): the channels may have a second basin some way off (a contact held
+    5 ms early was a local optimum of its own, chi-square 17 % above the true one); the lowest.
+
+    Returns (value, its std from the data (the covariance at that optimum, as the fit's own),
+    which bound of its range stopped it or ''), or None when no start gave a finite cost."""
+    at = held[spec[i].name]
+    trial = {**data, "w": jnp.asarray(weights)}
+    best_u, best_cost = None, np.inf
+    for shift in starts:
+        u1, cost, _ = _solve_jit(spec, channels, n_out, options, trial, u.at[i].set(spec[i].to_unconstrained(at + shift)))
+        if float(cost) < best_cost:
+            best_u, best_cost = u1, float(cost)
+    if not np.isfinite(best_cost):
+        return None
+    fitted = [k for k, p in enumerate(spec) if p.name not in held or k == i]
+    r, jac, dvalue, _, _ = (np.asarray(a) for a in _finish_jit(spec, channels, n_out, options, data, best_u))
+    unc = parameter_covariance(r, jac[:, fitted], dvalue[fitted], np.array([spec[k].typical for k in fitted]), groups,
+                               n_res, per_channel=per_channel, tau_at_least=approach_tau_floor(groups))
+    value = float(spec[i].to_physical(best_u[i]))
+    return value, float(unc.std[fitted.index(i)]), spec[i].at_bound(value)
 
 
 def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, i_c: int, held: dict, sigma: float,
                               groups, n_res: int, per_channel: bool, model_std: float):
     """The contact measured apart from the fitted channels (``held["contact_time"]``, s, of
     standard deviation ``sigma``) combined with where the fitted channels
-    alone put it (:func:`_contact_from_motion`, its std the data's and ``model_std``, the
+    alone put it (:func:`_estimate_from_channels`, its std the data's and ``model_std``, the
     model's own error of that estimate, in quadrature): the inverse-variance mean, where the
     fit is then held (``held`` updated, the fit continued from ``u`` in ``weights``): the
     nearer the measurement's sigma is to the channels', the more the channels move it. An
@@ -470,17 +491,12 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
     combined sigma, {model, model_std_data, model_std, held_at, held_std[, model_at_bound]});
     without a finite estimate from the channels, (u, the measurement's sigma, {})."""
     seen = held["contact_time"]
-    u_seen = u.at[i_c].set(spec[i_c].to_unconstrained(seen))  # held, its u was never set: the measured value
-    u_m, cost = _contact_from_motion(spec, channels, n_out, options, {**data, "w": jnp.asarray(weights)}, u_seen, i_c)
-    if not np.isfinite(cost):
+    estimate = _estimate_from_channels(spec, channels, n_out, options, data, weights, u, i_c, held,
+                                       MOTION_CONTACT_STARTS_S, groups, n_res, per_channel)
+    if estimate is None:
         return u, sigma, {}
-    fitted = [i for i, p in enumerate(spec) if p.name not in held or i == i_c]
-    r, jac, dvalue, _, _ = (np.asarray(a) for a in _finish_jit(spec, channels, n_out, options, data, u_m))
-    unc = parameter_covariance(r, jac[:, fitted], dvalue[fitted], np.array([spec[i].typical for i in fitted]), groups,
-                               n_res, per_channel=per_channel, tau_at_least=approach_tau_floor(groups))
-    model, std_data = float(spec[i_c].to_physical(u_m[i_c])), float(unc.std[fitted.index(i_c)])
+    model, std_data, bound = estimate
     std = math.hypot(std_data, model_std)
-    bound = spec[i_c].at_bound(model)
     if bound:
         return u, sigma, {"model": model, "model_std_data": std_data, "model_std": std, "held_at": seen,
                           "held_std": sigma, "model_at_bound": bound}
@@ -652,6 +668,9 @@ def fit(
                         and any(p.name == "contact_time" for p in free) and "contact_time" not in held)
     if contact_held:
         held["contact_time"] = float(measurement.contact_time_s)
+    scale_held = bool(options.hold_measured_scale and measurement.length_scale_sigma and "length_scale" not in held)
+    if scale_held:  # a measured fact, not a knob (FitOptions.hold_measured_scale)
+        held["length_scale"] = 1.0
     init = {
         **{n: float(getattr(template, n)) for n in ("k_compression", "k_restitution", "restitution", "dz_contact")},
         "impact_speed": speed_guess,
@@ -693,7 +712,7 @@ def fit(
     # the number of starts, their seed and the reweighting do not change the compiled solve:
     # fits that differ only in those share it
     compiled = dataclasses.replace(options, starts=1, seed=0, misfit_weights=False, face_friction=False,
-                                   hold_measured_contact=True, contact_from_motion=True)
+                                   hold_measured_contact=True, contact_from_motion=True, hold_measured_scale=True)
     runs = []
     for k, u0 in enumerate(_starting_points(free, init, options, held)):
         if progress is not None:
@@ -724,6 +743,18 @@ def fit(
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     held_measured = {}
     n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
+    held_sigma = {}  # name -> sigma of each measured quantity held, carried into the covariance below
+    if scale_held:  # compared with where the channels alone would put it; held where measured
+        i_s = [p.name for p in free].index("length_scale")
+        held_sigma["length_scale"] = float(measurement.length_scale_sigma)
+        held_measured["length_scale"] = {"measured": held["length_scale"], "sigma": held_sigma["length_scale"],
+                                         "held_at": held["length_scale"], "held_std": held_sigma["length_scale"]}
+        estimate = _estimate_from_channels(free, channels, n_out, compiled, {**data, "mask": data["mask"].at[i_s].set(1.0)},
+                                           fit_weights, u, i_s, held, (0.0,), groups, n_res, options.misfit_weights)
+        if estimate is not None:
+            model, std_data, bound = estimate
+            held_measured["length_scale"].update(model=model, model_std_data=std_data, model_std=std_data,
+                                                 **({"model_at_bound": bound} if bound else {}))
     if contact_held:
         i_c = [p.name for p in free].index("contact_time")
         sigma = float(measurement.contact_time_sigma)
@@ -734,7 +765,12 @@ def fit(
                 free, channels, n_out, compiled, data, fit_weights, u, i_c, held, sigma, groups, n_res,
                 options.misfit_weights, error_table.std(CONTACT_FROM_MOTION, 0.0))
             held_measured["contact_time"].update(compared)
-        u = u.at[i_c].set(free[i_c].to_unconstrained(held.pop("contact_time")))
+        held_sigma["contact_time"] = sigma
+    for name in held_sigma:  # free, with no prior, for their columns of the Jacobian; at the held values
+        i = [p.name for p in free].index(name)
+        data["mask"] = data["mask"].at[i].set(1.0)
+        u = u.at[i].set(free[i].to_unconstrained(held.pop(name)))
+    if held_sigma:
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     # residuals and Jacobian in the recording's own sigmas: the covariance widens each channel by its misfit there
     r, jac_u, dvalue_du, traj, preds = finished
@@ -749,11 +785,11 @@ def fit(
         own = weighting_groups(channels, w, np.asarray(measurement.t))
         by_channel = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), own, n_res,
                                           per_channel=True, tau_at_least=approach_tau_floor(own))
-    if contact_held:
-        i_held = [p.name for p in free].index("contact_time")
-        unc = held_at_measurement(unc, i_held, sigma)
+    if held_sigma:  # together: each one's error carried into the others through all of them
+        i_held = [[p.name for p in free].index(name) for name in held_sigma]
+        unc = held_at_measurement(unc, i_held, list(held_sigma.values()))
         if by_channel is not None:
-            by_channel = held_at_measurement(by_channel, i_held, sigma)
+            by_channel = held_at_measurement(by_channel, i_held, list(held_sigma.values()))
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}

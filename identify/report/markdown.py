@@ -43,12 +43,20 @@ def model_choice_sentence(parameters: dict) -> str:
             f" the cabin alone. That choice is no measurement.")
 
 
+def held_where(p: dict) -> str:
+    """Where a held measurement (a ``priors`` entry with ``held``) was held: where the recording
+    measured it (a film's scale), or where that and the fitted channels' estimate combined put
+    it (the contact seen)."""
+    measured = (p["held_at"], p["held_std"]) == (p["prior"], p["prior_std"])
+    return "held where the recording measured it" if measured else "held at the two combined"
+
+
 def prior_lines(priors: dict) -> list[str]:
     """One line per quantity known before the fit (``result.json``'s ``priors``): what was
     known, what the fit made of it and the pull (fitted - known) / sigma; the recording's
     own measurements (speed, contact) first, then the other priors (an engine's mass from
-    the vehicle file). A measurement the fit held (the contact seen) is compared with where
-    the fitted channels alone would put it."""
+    the vehicle file). A measurement the fit held (the contact seen, a film's scale) is
+    compared with where the fitted channels alone would put it."""
     out = []
     for name in sorted(priors, key=lambda n: (n not in MEASURED, n)):
         p = priors[name]
@@ -57,8 +65,7 @@ def prior_lines(priors: dict) -> list[str]:
         source = "measured" if name in MEASURED else "prior"
         flag = " **conflict: model and recording disagree**" if p["conflict"] else ""
         fitted = "the fitted channels alone" if p.get("held") else "fitted"
-        held = (f"; held at the two combined, {p['held_at'] * scale:.4g} +- {p['held_std'] * scale:.2g}{u}"
-                if p.get("held") else "")
+        held = f"; {held_where(p)}, {p['held_at'] * scale:.4g} +- {p['held_std'] * scale:.2g}{u}" if p.get("held") else ""
         if p.get("at_bound"):
             held = (f" **ran {p['at_bound']}: the channels alone cannot place it**; held where measured,"
                     f" {p['held_at'] * scale:.4g} +- {p['held_std'] * scale:.2g}{u}")
