@@ -1,5 +1,5 @@
 """Accuracy of the whole chain on the reference world (run by hand:
-``python benchmarks/accuracy.py [--n 40] [--jobs 2] [--format film|isomme]``).
+``python benchmarks/accuracy.py [--n 40] [--jobs 2] [--format film|isomme|motion]``).
 
 For each world (``synth``: an independent car model and randomized footage, fixed seeds
 from ``SEED_BASE`` on, which no test uses), write the film (or ISO-MME recording), run
@@ -14,6 +14,10 @@ true frame rate the lab would know; discovery on), and compare with the truth:
   and in reported standard deviations; "at bound / not identified" counted apart;
 - discoveries against the concealed effect: right name, wrong name, "unexplained",
   nothing.
+
+``--format motion`` fits the world's simulated motion itself (a ``tracks.csv`` of x, z, pitch
+and the wheels' angles, exact, at a good film's stated sigmas): what the model alone gets
+wrong, to set beside the film's error, which adds the camera's and the tracker's.
 
 The baseline, in the same run: V-SIM's default parameters (what an expert would type in
 without the tool), their error against the same truth.
@@ -351,7 +355,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--n", type=int, default=40, help="number of worlds (default 40)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (each compiles the fit once)")
-    ap.add_argument("--format", choices=("film", "isomme"), default="film")
+    ap.add_argument("--format", choices=("film", "isomme", "motion"), default="film",
+                    help="film (default), isomme (sensors), or motion (the world's own motion: the model's share)")
     ap.add_argument("--effect", default=None, choices=EFFECTS, help="every world with this one effect")
     ap.add_argument("--calibration", action="store_true",
                     help=f"the calibration worlds (seeds from {CALIBRATION_SEED_BASE}) instead of the scored ones")

@@ -420,13 +420,13 @@ def _fit(recording, vehicle, veh, folder, fps, tape_segment, speed_kmh, discover
     # without discovery it is the reported fit, each channel then weighted by its own misfit
     base_options = dataclasses.replace(CANDIDATE_FIT, starts=options.starts, seed=options.seed, solver=options.solver,
                                        hold_measured_contact=options.hold_measured_contact,
-                                       contact_from_motion=options.contact_from_motion,
+                                       held_from_channels=options.held_from_channels,
                                        misfit_weights=options.misfit_weights and not discover)
     say("fitting the collision model (the first run compiles it: ~20 s)")
     base = fit_base(rec.measurement, veh, free=free, options=base_options, speed_mps=speed_mps, progress=say)
     # every later fit holds the contact where the base fit did: the measured one combined with the base model's
     rec = _with_contact_held_as(rec, base)
-    base_options = dataclasses.replace(base_options, contact_from_motion=False)
+    base_options = dataclasses.replace(base_options, held_from_channels=False)
     found = None
     if discover:
         say(f"base model: x RMS {base.rms_m * 1e3:.2f} mm; looking for physics it left out")

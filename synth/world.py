@@ -26,10 +26,16 @@ import numpy as np
 from synth.vehicle import Car, SynthError, car_to_toml, known_vehicles, load_car
 
 EFFECTS = ("clean", "stiffness_zone", "front_wheel_block", "rate_dependence", "engine_impact", "rear_axle_lift")
-FORMATS = ("film", "isomme")
+FORMATS = ("film", "isomme", "motion")
 SPEED_RANGE_KMH = (48.0, 64.0)
 DURATION_S = 0.3          # simulated time after first contact
 SENSOR_RATE_HZ = 10000.0  # ISO-MME sampling rate
+MOTION_RATE_HZ = 1000.0   # the world's own motion (format "motion"), sampled as a 1000 fps film
+MOTION_FRAMES_BEFORE = 20  # its samples of the free approach before first contact
+# the sigmas a motion recording states (no noise is added): a good film's tracking of x and z
+# and its pitch, the hubs' angles (interface units)
+MOTION_SIGMA = {"x_m": 2e-4, "z_m": 2e-4, "pitch_rad": 5e-4, "front_wheel_angle_rad": 0.01,
+                "rear_wheel_angle_rad": 0.01}
 
 # the interface's names (docs/interface.md) of the quantities the fit reports
 INTERFACE_PARAMS = ("k_compression", "k_restitution", "restitution", "dz_contact")
@@ -77,8 +83,10 @@ class World:
 
     @property
     def rate_hz(self) -> float:
-        """Sampling rate of the recording: the film's frame rate or the sensors' rate."""
-        return float(self.footage.fps) if self.footage is not None else SENSOR_RATE_HZ
+        """Sampling rate of the recording: the film's frame rate, the sensors' or the motion's."""
+        if self.footage is not None:
+            return float(self.footage.fps)
+        return MOTION_RATE_HZ if self.fmt == "motion" else SENSOR_RATE_HZ
 
 
 def _streams(seed: int) -> tuple[np.random.Generator, np.random.Generator, np.random.Generator]:
@@ -116,7 +124,8 @@ def make_world(seed: int, effect: str = "clean", vehicle: str | Path | None = No
         A shipped vehicle name or a TOML path, used as it is; default: a shipped vehicle
         drawn from the seed, perturbed as another lab's test car would be.
     fmt : str
-        ``film`` or ``isomme``.
+        ``film``, ``isomme`` or ``motion`` (the simulated motion itself as a ``tracks.csv``:
+        what the model alone gets wrong, with no camera or tracker in between).
     footage_overrides : dict, optional
         FootageSpec fields to set instead of drawing them (tests that need an easy film).
 
@@ -130,7 +139,7 @@ def make_world(seed: int, effect: str = "clean", vehicle: str | Path | None = No
     if effect != "random" and effect not in EFFECTS:
         raise SynthError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS)} or random")
     if fmt not in FORMATS:
-        raise SynthError(f"unknown format {fmt!r}; choose film or isomme")
+        raise SynthError(f"unknown format {fmt!r}; choose film, isomme or motion")
     from synth.physics import random_params
 
     rng_world, rng_phys, rng_foot = _streams(int(seed))
@@ -194,6 +203,29 @@ def _series(motion, v0: float, frames_before: int) -> dict:
         "pitch_rad": np.concatenate([zeros, motion.pitch]),
         "crush_m": np.concatenate([zeros, motion.crush]),
     }
+
+
+def write_motion_tracks(path: Path, motion, v0: float, wheel_radius: float, frames_before: int) -> None:
+    """The simulated motion as a ``tracks.csv`` (``docs/interface.md``): ``frames_before``
+    samples of the free approach (speed ``v0``, m/s, the wheels rolling on a radius of
+    ``wheel_radius``, m), then x, z, pitch and the wheels' angles as simulated, exact, each
+    with the sigma of ``MOTION_SIGMA`` (a good film's tracking; no noise is added)."""
+    t = np.asarray(motion.t, dtype=float)
+    tb = -np.arange(frames_before, 0, -1) / MOTION_RATE_HZ
+    zeros = np.zeros(frames_before)
+    columns = {
+        "x_m": np.concatenate([v0 * tb, motion.x]),
+        "z_m": np.concatenate([zeros, motion.z]),
+        "pitch_rad": np.concatenate([zeros, motion.pitch]),
+        "front_wheel_angle_rad": np.concatenate([v0 * tb / wheel_radius, motion.front_wheel_angle]),
+        "rear_wheel_angle_rad": np.concatenate([v0 * tb / wheel_radius, motion.rear_wheel_angle]),
+    }
+    header = ["t_ms"] + [c for name in columns for c in (name, f"{name}_sigma")]
+    rows = [header]
+    for k, t_s in enumerate(np.concatenate([tb, t])):
+        rows.append([f"{1e3 * t_s:.6f}"] + [v for name, values in columns.items()
+                                              for v in (f"{values[k]:.9g}", f"{MOTION_SIGMA[name]:g}")])
+    path.write_text("".join(",".join(r) + "\n" for r in rows))
 
 
 def film_name(fmt: str) -> str:
@@ -263,6 +295,11 @@ def write_world(world: World, out: Path, progress=None, workdir: Path | None = N
             meta = render_film(world.car, frames, spec, tmp / name)
             truth.update(recording=name, fps=float(spec.fps), tape_segment=spec.tape_segment,
                          series=_series(motion, world.v0, spec.frames_before), footage=meta)
+        elif world.fmt == "motion":
+            name = "motion.tracks.csv"
+            write_motion_tracks(tmp / name, motion, world.v0, world.car.wheel_radius, MOTION_FRAMES_BEFORE)
+            truth.update(recording=name, fps=MOTION_RATE_HZ, tape_segment=None,
+                         series=_series(motion, world.v0, MOTION_FRAMES_BEFORE))
         else:
             from synth.isomme import write_isomme
 

@@ -142,6 +142,30 @@ def test_isomme_world_reads_back_with_identify(tmp_path):
     assert truth["events_ms"]["engine_contact"] is not None
 
 
+def test_a_motion_world_is_its_simulated_motion_as_identify_reads_a_tracks_csv(tmp_path):
+    """Format "motion": the world's own motion, exact, as a tracks.csv at 1000 Hz with a good
+    film's sigmas: the same physics as the film world of the seed (its own random streams)."""
+    from identify.fitting.collision_fit import approach_speed
+    from identify.recordings.measurement import measurement_from_tracks_csv
+    from synth.world import MOTION_FRAMES_BEFORE, MOTION_SIGMA
+
+    world = make_world(21, "clean", fmt="motion")
+    assert world.params == make_world(21, "clean", fmt="film").params and world.rate_hz == 1000.0
+    truth = write_world(world, tmp_path / "motion")
+    m = measurement_from_tracks_csv(tmp_path / "motion" / truth["recording"])
+    series = read_truth(tmp_path / "motion")["series"]
+    np.testing.assert_allclose(m.t * 1e3, series["t_ms"], atol=1e-9)
+    for name in ("x_m", "z_m", "pitch_rad"):
+        np.testing.assert_allclose(m.channels[name], series[name], rtol=1e-8, atol=1e-12)
+        assert np.all(m.sigma[name] == MOTION_SIGMA[name])
+    assert np.sum(m.t < 0) == MOTION_FRAMES_BEFORE and m.t[MOTION_FRAMES_BEFORE] == 0.0
+    assert approach_speed(m) == pytest.approx(truth["v0_kmh"] / 3.6, rel=1e-9)
+    # the wheels roll on the file's radius before contact and turn on continuously through it
+    r = load_car(tmp_path / "motion" / "vehicle.toml").wheel_radius
+    angle = m.channels["front_wheel_angle_rad"]
+    np.testing.assert_allclose(np.diff(angle[:MOTION_FRAMES_BEFORE + 2]), truth["v0_kmh"] / 3.6 / 1000.0 / r, rtol=1e-3)
+
+
 def test_worlds_are_reproducible_and_vary():
     a, b, c = make_world(5, "random"), make_world(5, "random"), make_world(6, "random")
     assert a.params == b.params and a.footage == b.footage and a.v0 == b.v0

@@ -32,7 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"concealed physics: {', '.join(EFFECTS)} or random (default clean)")
     p.add_argument("--vehicle", default=None,
                    help="vehicle name or .toml path (default: a shipped vehicle drawn from the seed and perturbed)")
-    p.add_argument("--format", default="film", metavar="FORMAT", help="film (default) or isomme")
+    p.add_argument("--format", default="film", metavar="FORMAT",
+                   help="film (default), isomme, or motion (the simulated motion itself as a tracks.csv:"
+                        " what the model alone gets wrong, with no camera)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
     p.set_defaults(func=run)
 

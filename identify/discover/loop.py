@@ -78,7 +78,7 @@ from identify.fitting.residuals import ResidualAnalysis, analyse, channel_chi2, 
 # named wrong on 5 of 20 worlds with one effect, 1 of 19 before, and 2 of 16 clean worlds);
 # the fit reported holds it (``discover``).
 CANDIDATE_FIT = FitOptions(starts=1, max_steps=40, rtol=1e-5, atol=1e-5, misfit_weights=False,
-                           hold_measured_contact=False, contact_from_motion=False)
+                           hold_measured_contact=False, held_from_channels=False)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -838,7 +838,8 @@ def alternatives(rounds: list[list[Trial]], fits: dict[str, FitResult], current:
 
 def against_what_was_measured(values: dict[str, float], current: FitResult) -> bool:
     """Whether ``values`` move a quantity measured before the fit (``current.priors``: the
-    film's scale from its tape or hubs, the contact seen, a header's impact speed) further
+    contact seen, a header's impact speed, a film's scale where it is fitted rather than held,
+    ``FitOptions.hold_measured_scale``) further
     from its measurement than ``current`` has it by more than ``FitResult.PULL_CONFLICT`` of
     the measurement's sigmas. The car's free motion before contact fixes its speed in pixels
     per frame, so a model that moves the speed moves the scale with it. On development

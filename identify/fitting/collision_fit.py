@@ -115,12 +115,14 @@ class FitOptions:
         fact, not a knob (:func:`fit`), where the model-error table has measured how far the
         channels' own contact can be off (``CONTACT_FROM_MOTION``: a film's). Otherwise, and
         off, it is a prior of the fit.
-    contact_from_motion : with a held contact, fit on from the optimum with the contact free
-        and no prior, to find where the fitted channels alone put it, and hold it where the
-        two combined put it (inverse-variance mean, the channels' estimate with the model's
-        own error, ``CONTACT_FROM_MOTION``), reported in ``FitResult.held_measured`` and
-        ``FitResult.pulls``; off, it is held where it was measured (the fits after the base
-        one, whose measured contact is where the base fit held it).
+    held_from_channels : with a held measurement, fit on from the optimum with it free and
+        no prior, to find where the fitted channels alone put it, reported in
+        ``FitResult.held_measured`` and ``FitResult.pulls``: a held contact is then held
+        where the two combined put it (inverse-variance mean, the channels' estimate with the
+        model's own error, ``CONTACT_FROM_MOTION``), a held scale stays where it was
+        measured; off, both are held where they were measured, not compared (the fits after
+        the base one, whose measured contact is where the base fit held it: one solve fewer
+        each).
     hold_measured_scale : a film's scale (its tape, or its hub targets and the wheelbase) is
         held at its measurement, its sigma carried into the others' covariance, not fitted:
         the approach frames fix speed times scale, so the fit could move the scale only by
@@ -141,7 +143,7 @@ class FitOptions:
     misfit_weights: bool = True
     face_friction: bool = False
     hold_measured_contact: bool = True
-    contact_from_motion: bool = True
+    held_from_channels: bool = True
     hold_measured_scale: bool = True
 
 
@@ -174,11 +176,12 @@ class FitResult:
     held_measured : name -> {measured, sigma[, model, model_std_data, model_std, held_at, held_std,
         model_at_bound]}
         for a measured quantity the fit held, not fitted (the contact seen:
-        ``FitOptions.hold_measured_contact``), in ``values`` where it was held with its sigma
-        carried into the others' covariance; model: where the fitted channels alone put it,
-        model_std that estimate's std with the model's own error, model_std_data without;
-        held_at, held_std: the measurement and that estimate combined, where it was held
-        (``FitOptions.contact_from_motion``; without, at the measurement); model_at_bound:
+        ``FitOptions.hold_measured_contact``; a film's scale: ``FitOptions.hold_measured_scale``),
+        in ``values`` where it was held with its sigma carried into the others' covariance;
+        model: where the fitted channels alone put it, model_std that estimate's std with the
+        model's own error, model_std_data without; held_at, held_std: where it was held (the
+        contact: the measurement and that estimate combined, ``FitOptions.held_from_channels``;
+        without, and the scale, at the measurement); model_at_bound:
         which bound of its range stopped that estimate (then not combined: held at the
         measurement).
     model_error_where : name -> where its ``std_model`` was measured, for the parameters whose
@@ -252,7 +255,7 @@ class FitResult:
         they put it at least that far off, a pull and a conflict at least that large."""
         out = {}
         for name, h in self.held_measured.items():
-            if "model" not in h:  # not compared (``FitOptions.contact_from_motion``)
+            if "model" not in h:  # not compared (``FitOptions.held_from_channels``)
                 continue
             pull = (h["model"] - h["measured"]) / math.hypot(h["sigma"], h["model_std"])
             out[name] = {"prior": h["measured"], "prior_std": h["sigma"], "value": h["model"], "std": h["model_std"],
@@ -712,7 +715,7 @@ def fit(
     # the number of starts, their seed and the reweighting do not change the compiled solve:
     # fits that differ only in those share it
     compiled = dataclasses.replace(options, starts=1, seed=0, misfit_weights=False, face_friction=False,
-                                   hold_measured_contact=True, contact_from_motion=True, hold_measured_scale=True)
+                                   hold_measured_contact=True, held_from_channels=True, hold_measured_scale=True)
     runs = []
     for k, u0 in enumerate(_starting_points(free, init, options, held)):
         if progress is not None:
@@ -744,13 +747,14 @@ def fit(
     held_measured = {}
     n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
     held_sigma = {}  # name -> sigma of each measured quantity held, carried into the covariance below
-    if scale_held:  # compared with where the channels alone would put it; held where measured
+    if scale_held:  # held where measured; compared with where the channels alone would put it
         i_s = [p.name for p in free].index("length_scale")
         held_sigma["length_scale"] = float(measurement.length_scale_sigma)
         held_measured["length_scale"] = {"measured": held["length_scale"], "sigma": held_sigma["length_scale"],
                                          "held_at": held["length_scale"], "held_std": held_sigma["length_scale"]}
-        estimate = _estimate_from_channels(free, channels, n_out, compiled, {**data, "mask": data["mask"].at[i_s].set(1.0)},
-                                           fit_weights, u, i_s, held, (0.0,), groups, n_res, options.misfit_weights)
+        free_scale = {**data, "mask": data["mask"].at[i_s].set(1.0)}
+        estimate = _estimate_from_channels(free, channels, n_out, compiled, free_scale, fit_weights, u, i_s, held, (0.0,),
+                                           groups, n_res, options.misfit_weights) if options.held_from_channels else None
         if estimate is not None:
             model, std_data, bound = estimate
             held_measured["length_scale"].update(model=model, model_std_data=std_data, model_std=std_data,
@@ -760,7 +764,7 @@ def fit(
         sigma = float(measurement.contact_time_sigma)
         held_measured["contact_time"] = {"measured": held["contact_time"], "sigma": sigma}
         data["mask"] = data["mask"].at[i_c].set(1.0)  # the contact free, with no prior: its Jacobian column
-        if options.contact_from_motion:
+        if options.held_from_channels:
             u, sigma, compared = _held_at_combined_contact(
                 free, channels, n_out, compiled, data, fit_weights, u, i_c, held, sigma, groups, n_res,
                 options.misfit_weights, error_table.std(CONTACT_FROM_MOTION, 0.0))
