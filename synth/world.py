@@ -205,26 +205,23 @@ def _series(motion, v0: float, frames_before: int) -> dict:
     }
 
 
-def write_motion_tracks(path: Path, motion, v0: float, wheel_radius: float, frames_before: int) -> None:
-    """The simulated motion as a ``tracks.csv`` (``docs/interface.md``): ``frames_before``
-    samples of the free approach (speed ``v0``, m/s, the wheels rolling on a radius of
-    ``wheel_radius``, m), then x, z, pitch and the wheels' angles as simulated, exact, each
-    with the sigma of ``MOTION_SIGMA`` (a good film's tracking; no noise is added)."""
-    t = np.asarray(motion.t, dtype=float)
-    tb = -np.arange(frames_before, 0, -1) / MOTION_RATE_HZ
-    zeros = np.zeros(frames_before)
+def write_motion_tracks(path: Path, series: dict, motion, wheel_radius: float) -> None:
+    """The simulated motion as a ``tracks.csv`` (``docs/interface.md``): the truth's
+    ``series`` (:func:`_series`: the free approach, then x, z and pitch as simulated) and the
+    wheels' angles (rolling on ``wheel_radius``, m, before contact, then as simulated), exact,
+    each with the sigma of ``MOTION_SIGMA`` (a good film's tracking; no noise is added)."""
+    before = len(series["t_ms"]) - len(motion.t)
+    rolled = np.asarray(series["x_m"][:before]) / wheel_radius
     columns = {
-        "x_m": np.concatenate([v0 * tb, motion.x]),
-        "z_m": np.concatenate([zeros, motion.z]),
-        "pitch_rad": np.concatenate([zeros, motion.pitch]),
-        "front_wheel_angle_rad": np.concatenate([v0 * tb / wheel_radius, motion.front_wheel_angle]),
-        "rear_wheel_angle_rad": np.concatenate([v0 * tb / wheel_radius, motion.rear_wheel_angle]),
+        **{name: series[name] for name in ("x_m", "z_m", "pitch_rad")},
+        "front_wheel_angle_rad": np.concatenate([rolled, motion.front_wheel_angle]),
+        "rear_wheel_angle_rad": np.concatenate([rolled, motion.rear_wheel_angle]),
     }
     header = ["t_ms"] + [c for name in columns for c in (name, f"{name}_sigma")]
     rows = [header]
-    for k, t_s in enumerate(np.concatenate([tb, t])):
-        rows.append([f"{1e3 * t_s:.6f}"] + [v for name, values in columns.items()
-                                              for v in (f"{values[k]:.9g}", f"{MOTION_SIGMA[name]:g}")])
+    for k, t_ms in enumerate(series["t_ms"]):
+        rows.append([f"{t_ms:.6f}"] + [v for name, values in columns.items()
+                                       for v in (f"{values[k]:.9g}", f"{MOTION_SIGMA[name]:g}")])
     path.write_text("".join(",".join(r) + "\n" for r in rows))
 
 
@@ -297,9 +294,9 @@ def write_world(world: World, out: Path, progress=None, workdir: Path | None = N
                          series=_series(motion, world.v0, spec.frames_before), footage=meta)
         elif world.fmt == "motion":
             name = "motion.tracks.csv"
-            write_motion_tracks(tmp / name, motion, world.v0, world.car.wheel_radius, MOTION_FRAMES_BEFORE)
-            truth.update(recording=name, fps=MOTION_RATE_HZ, tape_segment=None,
-                         series=_series(motion, world.v0, MOTION_FRAMES_BEFORE))
+            series = _series(motion, world.v0, MOTION_FRAMES_BEFORE)
+            write_motion_tracks(tmp / name, series, motion, world.car.wheel_radius)
+            truth.update(recording=name, fps=MOTION_RATE_HZ, tape_segment=None, series=series)
         else:
             from synth.isomme import write_isomme
 

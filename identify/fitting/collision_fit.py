@@ -747,8 +747,9 @@ def fit(
     held_measured = {}
     n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
     held_sigma = {}  # name -> sigma of each measured quantity held, carried into the covariance below
+    index = {p.name: i for i, p in enumerate(free)}
     if scale_held:  # held where measured; compared with where the channels alone would put it
-        i_s = [p.name for p in free].index("length_scale")
+        i_s = index["length_scale"]
         held_sigma["length_scale"] = float(measurement.length_scale_sigma)
         held_measured["length_scale"] = {"measured": held["length_scale"], "sigma": held_sigma["length_scale"],
                                          "held_at": held["length_scale"], "held_std": held_sigma["length_scale"]}
@@ -760,7 +761,7 @@ def fit(
             held_measured["length_scale"].update(model=model, model_std_data=std_data, model_std=std_data,
                                                  **({"model_at_bound": bound} if bound else {}))
     if contact_held:
-        i_c = [p.name for p in free].index("contact_time")
+        i_c = index["contact_time"]
         sigma = float(measurement.contact_time_sigma)
         held_measured["contact_time"] = {"measured": held["contact_time"], "sigma": sigma}
         data["mask"] = data["mask"].at[i_c].set(1.0)  # the contact free, with no prior: its Jacobian column
@@ -771,9 +772,8 @@ def fit(
             held_measured["contact_time"].update(compared)
         held_sigma["contact_time"] = sigma
     for name in held_sigma:  # free, with no prior, for their columns of the Jacobian; at the held values
-        i = [p.name for p in free].index(name)
-        data["mask"] = data["mask"].at[i].set(1.0)
-        u = u.at[i].set(free[i].to_unconstrained(held.pop(name)))
+        data["mask"] = data["mask"].at[index[name]].set(1.0)
+        u = u.at[index[name]].set(free[index[name]].to_unconstrained(held.pop(name)))
     if held_sigma:
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     # residuals and Jacobian in the recording's own sigmas: the covariance widens each channel by its misfit there
