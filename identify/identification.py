@@ -217,8 +217,10 @@ def _nuisance_entry(fr: FitResult, name: str) -> dict:
     when the fit says so (a contact time stopped by its bound)."""
     entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name)}
     if name in fr.held_measured:
-        entry["held"] = ("not fitted: held where the recording measured it, combined with where the fitted channels"
-                         " alone put it (priors)")
+        h = fr.held_measured[name]
+        where = ("where the recording measured it" if h.get("held_at", h["measured"]) == h["measured"]
+                 else "where the recording measured it, combined with where the fitted channels alone put it")
+        entry["held"] = f"not fitted: held {where} (priors)"
     ok, reason = fr.identified.get(name, (True, ""))
     if not ok:
         entry.update(identified=False, reason=reason)

@@ -153,6 +153,27 @@ def test_a_force_no_candidate_has_is_reported_unexplained(a4, unexplained_case):
     assert not ok and "rear wheels lifting" in why and "did not adopt" not in why, why
 
 
+def test_the_unexplained_forces_refit_keeps_what_was_measured_at_its_measurement(a4, unexplained_case):
+    """The force's linearised refit frees the parameters beside it, but not what was measured
+    before the fit: a held measurement (a film's speed) or a prior stays within its sigma (a
+    row shift / sigma each). Free, a flexible force with a free speed put it 62 % off on
+    scored world 910015."""
+    from identify.discover.missing_force import estimate_missing_force
+
+    _, result = unexplained_case
+    fr = dataclasses.replace(result.final, priors={})
+    free = estimate_missing_force(fr, None, a4, tau=1.0)
+    v = fr.values["impact_speed"]
+    assert abs(free.parameter_shift["impact_speed"]) > 1e-4  # unpenalised it moves
+    for sigma in (1e-6, 1e-4):
+        held = dataclasses.replace(fr, held_measured={"impact_speed": {"measured": v, "sigma": sigma, "held_at": v,
+                                                                        "held_std": sigma}})
+        shift = estimate_missing_force(held, None, a4, tau=1.0).parameter_shift["impact_speed"]
+        assert abs(shift) < 3 * sigma < abs(free.parameter_shift["impact_speed"])
+    prior = dataclasses.replace(fr, priors={"impact_speed": (v, 1e-6)})
+    assert abs(estimate_missing_force(prior, None, a4, tau=1.0).parameter_shift["impact_speed"]) < 3e-6
+
+
 def test_result_entries_follow_the_interface_and_are_json(block_case):
     _, _, result, _ = block_case
     text = json.dumps(result.discoveries)

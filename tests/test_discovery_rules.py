@@ -897,6 +897,18 @@ def test_an_alternative_that_moves_what_was_measured_before_the_fit_is_none(monk
     zone.values["length_scale"] = 1.0005
     assert [a.label for a in loop.alternatives([trials], {"stiffness_zone": zone}, current, None, vehicle=None)] == [
         "stiffness zone"]
+    # held where measured (a film's scale and speed since 2026-11-29), not priors: the same guard
+    # (scored world 910015, clean: the force's refit 60 % off in speed, the speed's std 38 km/h)
+    current.priors = {}
+    current.held_measured = {"length_scale": {"measured": 1.0, "sigma": 0.00056, "held_at": 1.0, "held_std": 0.00056},
+                             "impact_speed": {"measured": 17.25, "sigma": 0.02, "held_at": 17.25, "held_std": 0.02}}
+    missing.parameter_shift = {"k_compression": 8.6e4, "impact_speed": 0.01, "length_scale": 0.18}
+    assert loop.alternatives([accepted], {}, current, missing, vehicle=None) == []
+    missing.parameter_shift = {"k_compression": 8.6e4, "impact_speed": 1.39, "length_scale": 0.0001}
+    assert loop.alternatives([accepted], {}, current, missing, vehicle=None) == []
+    missing.parameter_shift = {"k_compression": 8.6e4, "impact_speed": 0.03, "length_scale": 0.0001}
+    assert [a.label for a in loop.alternatives([accepted], {}, current, missing, vehicle=None)] == [
+        "an unexplained force"]
 
 
 def test_residuals_without_a_window_are_not_called_white_noise_when_they_are_correlated():

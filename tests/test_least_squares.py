@@ -324,3 +324,23 @@ def test_two_values_held_together_carry_both_sigmas_as_the_linear_algebra_gives(
     # holding them one after the other is not the same (the second reads the first's noise as data)
     one_by_one = held_at_measurement(held_at_measurement(full, 2, sigmas[0]), 3, sigmas[1])
     assert not np.allclose(one_by_one.cov[:2, :2], held.cov[:2, :2], rtol=1e-3)
+
+
+def test_held_values_with_tied_errors_carry_their_full_covariance():
+    # independent reference: as above, with the held values' errors correlated (a film's speed
+    # measured in its own lengths and its scale): (J_o^T J_o)^-1 + A S A^T with S full
+    rng = np.random.default_rng(8)
+    jac = rng.normal(size=(60, 4))
+    jac[:, 3] += 0.8 * jac[:, 0]
+    r = rng.normal(size=60)
+    full = parameter_covariance(r, jac, np.ones(4), np.ones(4), {}, 10 * len(r))
+    s = np.array([[0.04, -0.006], [-0.006, 0.0025]])
+    held = held_at_measurement(full, [2, 3], covariance=s)
+    j_o, j_h = jac[:, :2], jac[:, 2:]
+    inv = np.linalg.inv(j_o.T @ j_o) * full.cov[0, 0] / np.linalg.inv(jac.T @ jac)[0, 0]
+    a = np.linalg.inv(j_o.T @ j_o) @ j_o.T @ j_h
+    np.testing.assert_allclose(held.cov[:2, :2], inv + a @ s @ a.T, rtol=1e-9)
+    np.testing.assert_allclose(held.cov[2:, 2:], s, rtol=1e-9)
+    # the tie matters: the same sigmas taken as independent give another covariance
+    apart = held_at_measurement(full, [2, 3], np.sqrt(np.diag(s)))
+    assert not np.allclose(apart.cov[:2, :2], held.cov[:2, :2], rtol=1e-3)

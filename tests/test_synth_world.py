@@ -159,7 +159,7 @@ def test_a_motion_world_is_its_simulated_motion_as_identify_reads_a_tracks_csv(t
         np.testing.assert_allclose(m.channels[name], series[name], rtol=1e-8, atol=1e-12)
         assert np.all(m.sigma[name] == MOTION_SIGMA[name])
     assert np.sum(m.t < 0) == MOTION_FRAMES_BEFORE and m.t[MOTION_FRAMES_BEFORE] == 0.0
-    assert approach_speed(m) == pytest.approx(truth["v0_kmh"] / 3.6, rel=1e-9)
+    assert approach_speed(m)[0] == pytest.approx(truth["v0_kmh"] / 3.6, rel=1e-9)
     # the wheels roll on the file's radius before contact and turn on continuously through it
     r = load_car(tmp_path / "motion" / "vehicle.toml").wheel_radius
     angle = m.channels["front_wheel_angle_rad"]

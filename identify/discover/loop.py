@@ -846,8 +846,14 @@ def against_what_was_measured(values: dict[str, float], current: FitResult) -> b
     worlds 960019 and 960008 the unexplained force's linearised refit of the parameters (BIC
     -10.8 and -82.8 against the reported model, so weighed in full) put the speed 5.0 % low
     and 8.0 % high with the scale 5 % and 18 % off (the tape's sigma 0.6 % and 0.06 %), and
-    the reported speed's std became 5.0 and 8.4 %; on six scored worlds it was 5-103 %."""
-    for name, (mu, sigma) in current.priors.items():
+    the reported speed's std became 5.0 and 8.4 %; on six scored worlds it was 5-103 %. A
+    measurement the fit held (``FitResult.held_measured``: a film's speed and scale, the contact
+    seen) counts at where it was held and how well (``held_std``): when the scale was first
+    held, the guard no longer saw it, and on scored world 910015 (clean) the force's refit,
+    60 % off in speed, widened the reported speed's std to 38 km/h."""
+    measured = {**{n: (h.get("held_at", h["measured"]), h.get("held_std", h["sigma"]))
+                   for n, h in current.held_measured.items()}, **current.priors}
+    for name, (mu, sigma) in measured.items():
         if name in values and name in current.values and sigma > 0:
             if abs(values[name] - mu) > abs(current.values[name] - mu) + FitResult.PULL_CONFLICT * sigma:
                 return True

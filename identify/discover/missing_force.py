@@ -10,7 +10,11 @@ lowers the extended BIC (chi2 + k (ln n + 2 ln K), K the number of possible puls
 tau-scaled as in discovery); the force is kept only if the whole lowers it by
 ``min_bic_gain`` and lowers the x residual's RMS by a tenth. The fitted parameters may
 readjust alongside (their sensitivities, by central differences through the simulation,
-enter every regression unpenalised: linearised refit). The estimate ignores the feedback
+enter every regression: linearised refit), unpenalised but for what was measured before the
+fit (a film's speed and scale, the contact seen, a header's speed, a prior), each held to its
+measurement by a row (shift / sigma): a flexible force with a free speed and scale bends them
+anywhere (scored world 910015, clean: the force's refit put the speed 62 % off, and that
+choice of model then widened the reported speed's std to 38 km/h). The estimate ignores the feedback
 of the extra force on the crush: it describes where and how much, not a law.
 
 The force is then compared along the fitted trajectory with physically meaningful terms
@@ -151,6 +155,16 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
     a = resp / s[:, None]
     b = e / s
     n_eff = len(b) / tau
+    # what was measured before the fit stays near its measurement: a row (shift / sigma) each,
+    # times sqrt(tau) so that it counts in full where the x rows count as n / tau
+    sigma = measured_sigmas(fr)
+    held = [(k, sigma[n]) for k, n in enumerate(fr.names) if n in sigma]
+    rows = np.zeros((len(held), sens.shape[1]))
+    for r_i, (k, sd) in enumerate(held):
+        rows[r_i, k] = math.sqrt(tau) / sd
+    sens = np.concatenate([sens, rows], axis=0)
+    a = np.concatenate([a, np.zeros((len(held), a.shape[1]))], axis=0)
+    b = np.concatenate([b, np.zeros(len(held))])
     # extended BIC (Chen and Chen 2008): choosing k pulses out of K positions costs
     # k (ln n + 2 ln K), not only k ln n: the search itself finds noise that looks like a pulse
     penalty = math.log(n_eff) + 2.0 * math.log(len(centres))
@@ -185,7 +199,7 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
     basis_grid = np.clip(1.0 - np.abs(grid[:, None] / 1e3 - centres[None, chosen]) / h, 0.0, None)
     force = basis_grid @ coef
     force_std = np.sqrt(np.einsum("ij,jk,ik->i", basis_grid, cov, basis_grid))
-    after = e - (cols * s[:, None]) @ coef_all
+    after = e - (cols[: len(e)] * s[:, None]) @ coef_all
     rms_before, rms_after = float(np.sqrt(np.mean(e**2))), float(np.sqrt(np.mean(after**2)))
     if rms_after > (1.0 - min_rms_drop) * rms_before:
         return None
@@ -223,6 +237,15 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
         description=description,
         parameter_shift={n: float(c) for n, c in zip(fr.names, coef_all[k_f:])},
     )
+
+
+def measured_sigmas(fr) -> dict[str, float]:
+    """name -> sigma (its unit) of each fitted quantity of ``fr`` measured before the fit: a
+    held measurement's (``FitResult.held_measured``: where it is held, and how well), a
+    prior's (``FitResult.priors``)."""
+    out = {n: float(h.get("held_std", h["sigma"])) for n, h in fr.held_measured.items()}
+    out.update({n: float(sd) for n, (_, sd) in fr.priors.items()})
+    return {n: sd for n, sd in out.items() if sd > 0 and n in fr.names}
 
 
 def describe(t_ms: np.ndarray, force: np.ndarray, window, fr, after_separation: bool = False) -> str:

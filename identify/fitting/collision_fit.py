@@ -132,6 +132,14 @@ class FitOptions:
         +11.1 -> -0.2 %, 960007's speed +3.6 -> +0.5 %). Where the fitted channels alone would
         put it is reported beside it (``FitResult.held_measured``, ``FitResult.pulls``). Off,
         it is a nuisance of the fit with the measurement as its prior.
+    hold_measured_speed : a film's impact speed is held where its approach frames put it (a
+        line through x before the measured contact, :func:`approach_speed`), its sigma (the
+        line's, widened by those frames' own misfit and correlation time, and the scale's,
+        tied to it: the approach measures speed times scale) carried into the others'
+        covariance: fitted, the crash's samples outnumber the approach's 15 to 1 and moved it
+        where the model's reading of the crash wanted it (scored world 910028: +1.38 +- 0.36 %,
+        3.9 sigma off). Where the fitted channels alone would put it is reported beside it.
+        A header's speed (sensors) stays a prior; off, the film's speed is fitted.
     """
 
     starts: int = 5
@@ -145,6 +153,7 @@ class FitOptions:
     hold_measured_contact: bool = True
     held_from_channels: bool = True
     hold_measured_scale: bool = True
+    hold_measured_speed: bool = True
 
 
 @dataclasses.dataclass
@@ -176,12 +185,13 @@ class FitResult:
     held_measured : name -> {measured, sigma[, model, model_std_data, model_std, held_at, held_std,
         model_at_bound]}
         for a measured quantity the fit held, not fitted (the contact seen:
-        ``FitOptions.hold_measured_contact``; a film's scale: ``FitOptions.hold_measured_scale``),
+        ``FitOptions.hold_measured_contact``; a film's scale: ``FitOptions.hold_measured_scale``;
+        its speed: ``FitOptions.hold_measured_speed``, sigma with the scale's share),
         in ``values`` where it was held with its sigma carried into the others' covariance;
         model: where the fitted channels alone put it, model_std that estimate's std with the
         model's own error, model_std_data without; held_at, held_std: where it was held (the
         contact: the measurement and that estimate combined, ``FitOptions.held_from_channels``;
-        without, and the scale, at the measurement); model_at_bound:
+        without, and the scale and speed, at the measurement); model_at_bound:
         which bound of its range stopped that estimate (then not combined: held at the
         measurement).
     model_error_where : name -> where its ``std_model`` was measured, for the parameters whose
@@ -279,20 +289,34 @@ class FitResult:
         return self.chi2 / max(self.dof, 1)
 
 
-def approach_speed(measurement: Measurement) -> float:
-    """m/s, the car's speed from a line fitted to x over the samples before contact.
+def _approach_samples(measurement: Measurement) -> np.ndarray:
+    """Mask of the valid x samples before the measured first contact (t < 0): the free approach."""
+    if "x_m" not in measurement.channels:
+        return np.zeros(len(measurement.t), bool)
+    return (np.asarray(measurement.t) < 0) & measurement.valid("x_m")
+
+
+def approach_speed(measurement: Measurement) -> tuple[float, float]:
+    """(m/s, m/s): the car's speed from a line fitted to x over the samples before contact,
+    each weighted by its sigma, and the line's standard deviation were those sigmas right
+    and the samples independent (:func:`fit` widens it by the approach's own misfit and
+    correlation time, as the fit weighs those samples).
 
     Raises UserError when there are fewer than 5 such samples."""
-    before = (measurement.t < 0) & (measurement.valid("x_m") if "x_m" in measurement.channels else False)
-    if np.sum(before) < 5:
+    before = _approach_samples(measurement)
+    if np.sum(before) < MIN_BEFORE_CONTACT:
         raise UserError(
-            f"{measurement.source}: the impact speed is unknown and fewer than 5 samples precede contact;"
-            " give it with --speed (km/h)"
+            f"{measurement.source}: the impact speed is unknown and fewer than {MIN_BEFORE_CONTACT} samples precede"
+            " contact; give it with --speed (km/h)"
         )
-    slope = np.polyfit(measurement.t[before], measurement.channels["x_m"][before], 1)[0]
+    t, x = np.asarray(measurement.t)[before], np.asarray(measurement.channels["x_m"])[before]
+    w = 1.0 / np.maximum(np.asarray(measurement.sigma["x_m"])[before], 1e-12)
+    design = np.stack([np.ones_like(t), t - t.mean()], axis=1) * w[:, None]
+    coef, *_ = np.linalg.lstsq(design, x * w, rcond=None)
+    slope = float(coef[1])
     if not slope > 0:
         raise UserError(f"{measurement.source}: the car does not move towards the barrier before contact")
-    return float(slope)
+    return slope, float(np.sqrt(np.linalg.inv(design.T @ design)[1, 1]))
 
 
 def _stack(measurement: Measurement):
@@ -451,31 +475,71 @@ def approach_tau_floor(groups) -> dict[str, str]:
     return {g: g[: -len(BEFORE_CONTACT)] for g in groups if g.endswith(BEFORE_CONTACT)}
 
 
-def _estimate_from_channels(spec, channels, n_out, options, data, weights, u, i: int, held: dict, starts,
-                            groups, n_res: int, per_channel: bool):
-    """Where the fitted channels alone put the held quantity ``spec[i]``: the fit continued
-    from the held fit's optimum ``u`` in ``weights`` with it free and no prior on it
-    (``data``: the fit's, its mask 1 and its prior weight 0), from its held value plus each of
-    ``starts`` (its unit): the channels may have a second basin some way off (a contact held
-    5 ms early was a local optimum of its own, chi-square 17 % above the true one); the lowest.
+def measured_covariance(names, variances: dict, measurement: Measurement, speed: float, speed_white: float,
+                        r: np.ndarray, own: dict, n_fitted: int) -> np.ndarray:
+    """(h, h) covariance of the measured quantities ``names`` a fit held (their units): the
+    ``variances`` given (the contact's), a film's scale its measured sigma (relative), and
+    its speed (m/s, ``speed``) the approach line's ``speed_white`` widened by the approach
+    frames' own misfit and correlation time (at the optimum's residuals ``r``, in the
+    recording's sigmas, of groups ``own``: ``weighting_groups``), with the scale's error in
+    it: the approach measures speed times scale, so a scale held 1 sigma high holds the speed
+    1 sigma (relative) high, cov(speed, scale) = -speed sigma_scale^2.
 
-    Returns (value, its std from the data (the covariance at that optimum, as the fit's own),
-    which bound of its range stopped it or ''), or None when no start gave a finite cost."""
-    at = held[spec[i].name]
+    Not floored by the crash's correlation time as the fitted speed's covariance is
+    (:func:`approach_tau_floor`: there the crash's samples measure the speed too): on 23
+    development films (960000-960023) the approach line's error over this sigma (the scale's
+    share in it) was within 1 on 20 and within 2 on all, largest 1.84 (960018, +0.055 %);
+    the crash's correlation time, dominated by what the model misses, would have widened it
+    3 to 6 times."""
+    var = dict(variances)
+    scale_var = float(measurement.length_scale_sigma or 0.0) ** 2 if "length_scale" in names else 0.0
+    if "length_scale" in names:
+        var["length_scale"] = scale_var
+    if "impact_speed" in names:
+        tau, misfit = channel_variance_factors(r, own, n_fitted)
+        g = "x_m" + BEFORE_CONTACT if "x_m" + BEFORE_CONTACT in own else "x_m"
+        var["impact_speed"] = speed_white**2 * tau[g] * misfit[g] + speed**2 * scale_var
+    s = np.diag([var[name] for name in names])
+    if "impact_speed" in names and "length_scale" in names:
+        i, j = names.index("impact_speed"), names.index("length_scale")
+        s[i, j] = s[j, i] = -speed * scale_var
+    return s
+
+
+def _estimate_from_channels(spec, channels, n_out, options, data, weights, u, idx, held: dict, starts,
+                            groups, n_res: int, per_channel: bool):
+    """Where the fitted channels alone put the held quantities ``spec[i]``, i in ``idx`` (one
+    index or several, estimated together): the fit continued from the held fit's optimum
+    ``u`` in ``weights`` with them free and no prior on them (``data``: the fit's, their mask 1
+    and their prior weight 0), from their held values, the first's plus each of ``starts``
+    (its unit): the channels may have a second basin some way off (a contact held 5 ms early
+    was a local optimum of its own, chi-square 17 % above the true one); the lowest.
+
+    Returns, one per index, (value, its std from the data (the covariance at that optimum, as
+    the fit's own), which bound of its range stopped it or ''), or None when no start gave a
+    finite cost."""
+    idx = [int(i) for i in np.atleast_1d(idx)]
+    for i in idx:
+        u = u.at[i].set(spec[i].to_unconstrained(held[spec[i].name]))
+    first = idx[0]
     trial = {**data, "w": jnp.asarray(weights)}
     best_u, best_cost = None, np.inf
     for shift in starts:
-        u1, cost, _ = _solve_jit(spec, channels, n_out, options, trial, u.at[i].set(spec[i].to_unconstrained(at + shift)))
+        start = u.at[first].set(spec[first].to_unconstrained(held[spec[first].name] + shift))
+        u1, cost, _ = _solve_jit(spec, channels, n_out, options, trial, start)
         if float(cost) < best_cost:
             best_u, best_cost = u1, float(cost)
     if not np.isfinite(best_cost):
         return None
-    fitted = [k for k, p in enumerate(spec) if p.name not in held or k == i]
+    fitted = [k for k, p in enumerate(spec) if p.name not in held or k in idx]
     r, jac, dvalue, _, _ = (np.asarray(a) for a in _finish_jit(spec, channels, n_out, options, data, best_u))
     unc = parameter_covariance(r, jac[:, fitted], dvalue[fitted], np.array([spec[k].typical for k in fitted]), groups,
                                n_res, per_channel=per_channel, tau_at_least=approach_tau_floor(groups))
-    value = float(spec[i].to_physical(best_u[i]))
-    return value, float(unc.std[fitted.index(i)]), spec[i].at_bound(value)
+    out = []
+    for i in idx:
+        value = float(spec[i].to_physical(best_u[i]))
+        out.append((value, float(unc.std[fitted.index(i)]), spec[i].at_bound(value)))
+    return out
 
 
 def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, i_c: int, held: dict, sigma: float,
@@ -498,7 +562,7 @@ def _held_at_combined_contact(spec, channels, n_out, options, data, weights, u, 
                                        MOTION_CONTACT_STARTS_S, groups, n_res, per_channel)
     if estimate is None:
         return u, sigma, {}
-    model, std_data, bound = estimate
+    (model, std_data, bound), = estimate
     std = math.hypot(std_data, model_std)
     if bound:
         return u, sigma, {"model": model, "model_std_data": std_data, "model_std": std, "held_at": seen,
@@ -636,7 +700,7 @@ def fit(
     channels, y, w, fitted_channels = _stack(measurement)
     speed_guess = speed_mps if speed_mps is not None else measurement.impact_speed_mps
     if speed_guess is None:
-        speed_guess = approach_speed(measurement)
+        speed_guess = approach_speed(measurement)[0]
     if template is None:  # the base model: V-SIM's defaults and the engine on its mounts
         from identify.discover.candidates import with_base_mechanisms
 
@@ -674,6 +738,13 @@ def fit(
     scale_held = bool(options.hold_measured_scale and measurement.length_scale_sigma and "length_scale" not in held)
     if scale_held:  # a measured fact, not a knob (FitOptions.hold_measured_scale)
         held["length_scale"] = 1.0
+    # a film's speed, from its approach frames (FitOptions.hold_measured_speed); a header's is a prior
+    speed_held = bool(options.hold_measured_speed and speed_mps is None and not measurement.impact_speed_sigma
+                      and kind_of(measurement) == "film" and np.sum(_approach_samples(measurement)) >= MIN_BEFORE_CONTACT
+                      and any(p.name == "impact_speed" for p in free) and "impact_speed" not in held)
+    if speed_held:
+        speed_guess, speed_white = approach_speed(measurement)
+        held["impact_speed"] = speed_guess
     init = {
         **{n: float(getattr(template, n)) for n in ("k_compression", "k_restitution", "restitution", "dz_contact")},
         "impact_speed": speed_guess,
@@ -715,7 +786,8 @@ def fit(
     # the number of starts, their seed and the reweighting do not change the compiled solve:
     # fits that differ only in those share it
     compiled = dataclasses.replace(options, starts=1, seed=0, misfit_weights=False, face_friction=False,
-                                   hold_measured_contact=True, held_from_channels=True, hold_measured_scale=True)
+                                   hold_measured_contact=True, held_from_channels=True, hold_measured_scale=True,
+                                   hold_measured_speed=True)
     runs = []
     for k, u0 in enumerate(_starting_points(free, init, options, held)):
         if progress is not None:
@@ -746,20 +818,21 @@ def fit(
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     held_measured = {}
     n_res = int(np.sum(w > 0)) + int(np.count_nonzero(np.asarray(data["prior_w"])))
-    held_sigma = {}  # name -> sigma of each measured quantity held, carried into the covariance below
+    held_var = {}  # name -> variance of each measured quantity held, carried into the covariance below
     index = {p.name: i for i, p in enumerate(free)}
-    if scale_held:  # held where measured; compared with where the channels alone would put it
-        i_s = index["length_scale"]
-        held_sigma["length_scale"] = float(measurement.length_scale_sigma)
-        held_measured["length_scale"] = {"measured": held["length_scale"], "sigma": held_sigma["length_scale"],
-                                         "held_at": held["length_scale"], "held_std": held_sigma["length_scale"]}
-        free_scale = {**data, "mask": data["mask"].at[i_s].set(1.0)}
-        estimate = _estimate_from_channels(free, channels, n_out, compiled, free_scale, fit_weights, u, i_s, held, (0.0,),
-                                           groups, n_res, options.misfit_weights) if options.held_from_channels else None
-        if estimate is not None:
-            model, std_data, bound = estimate
-            held_measured["length_scale"].update(model=model, model_std_data=std_data, model_std=std_data,
-                                                 **({"model_at_bound": bound} if bound else {}))
+    # the measured speed and scale held where measured, compared with where the channels alone
+    # put them (together: the approach frames fix their product); their sigmas below
+    at_measured = [name for name, on in (("impact_speed", speed_held), ("length_scale", scale_held)) if on]
+    for name in at_measured:
+        held_measured[name] = {"measured": held[name], "held_at": held[name]}
+    if at_measured and options.held_from_channels:
+        idx = [index[name] for name in at_measured]
+        free_measured = {**data, "mask": data["mask"].at[jnp.asarray(idx)].set(1.0)}
+        estimates = _estimate_from_channels(free, channels, n_out, compiled, free_measured, fit_weights, u, idx, held,
+                                            (0.0,), groups, n_res, options.misfit_weights)
+        for name, (model, std_data, bound) in zip(at_measured, estimates or ()):
+            held_measured[name].update(model=model, model_std_data=std_data, model_std=std_data,
+                                       **({"model_at_bound": bound} if bound else {}))
     if contact_held:
         i_c = index["contact_time"]
         sigma = float(measurement.contact_time_sigma)
@@ -770,11 +843,12 @@ def fit(
                 free, channels, n_out, compiled, data, fit_weights, u, i_c, held, sigma, groups, n_res,
                 options.misfit_weights, error_table.std(CONTACT_FROM_MOTION, 0.0))
             held_measured["contact_time"].update(compared)
-        held_sigma["contact_time"] = sigma
-    for name in held_sigma:  # free, with no prior, for their columns of the Jacobian; at the held values
+        held_var["contact_time"] = sigma**2
+    held_names = [*at_measured, *held_var]
+    for name in held_names:  # free, with no prior, for their columns of the Jacobian; at the held values
         data["mask"] = data["mask"].at[index[name]].set(1.0)
         u = u.at[index[name]].set(free[index[name]].to_unconstrained(held.pop(name)))
-    if held_sigma:
+    if held_names:
         finished = _finish_jit(free, channels, n_out, compiled, data, u)
     # residuals and Jacobian in the recording's own sigmas: the covariance widens each channel by its misfit there
     r, jac_u, dvalue_du, traj, preds = finished
@@ -785,15 +859,20 @@ def fit(
     unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), groups, n_res,
                                per_channel=options.misfit_weights, tau_at_least=approach_tau_floor(groups))
     by_channel = None  # FitResult.std_data_by_channel: the same optimum, each channel widened by its own misfit
+    own = weighting_groups(channels, w, np.asarray(measurement.t))
     if not options.misfit_weights:
-        own = weighting_groups(channels, w, np.asarray(measurement.t))
         by_channel = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), own, n_res,
                                           per_channel=True, tau_at_least=approach_tau_floor(own))
-    if held_sigma:  # together: each one's error carried into the others through all of them
-        i_held = [[p.name for p in free].index(name) for name in held_sigma]
-        unc = held_at_measurement(unc, i_held, list(held_sigma.values()))
+    if held_names:  # together: each one's error carried into the others through all of them
+        s = measured_covariance(held_names, held_var, measurement, speed_guess,
+                                speed_white if speed_held else 0.0, r, own, len(fitted))
+        for k, name in enumerate(held_names):
+            if name in at_measured:
+                held_measured[name].update(sigma=float(np.sqrt(s[k, k])), held_std=float(np.sqrt(s[k, k])))
+        i_held = [[p.name for p in free].index(name) for name in held_names]
+        unc = held_at_measurement(unc, i_held, covariance=s)
         if by_channel is not None:
-            by_channel = held_at_measurement(by_channel, i_held, list(held_sigma.values()))
+            by_channel = held_at_measurement(by_channel, i_held, covariance=s)
 
     values = {p.name: float(p.to_physical(u[i])) for i, p in enumerate(spec_all) if p.name not in held}
     every = {**{k: jnp.asarray(float(v)) for k, v in held.items()}, **{k: jnp.asarray(v) for k, v in values.items()}}

@@ -138,23 +138,28 @@ def parameter_covariance(r, jac_u, dvalue_du, typical, channel_rows: dict, n_res
     return Uncertainty(cov=cov, std=std, corr=corr, chi2=chi2, dof=dof, tau=tau, misfit=misfit, scale=scale)
 
 
-def held_at_measurement(unc: Uncertainty, index, sigma) -> Uncertainty:
+def held_at_measurement(unc: Uncertainty, index, sigma=None, covariance=None) -> Uncertainty:
     """The uncertainty of a fit that held parameters ``index`` (one index or several) at
-    measured values of standard deviations ``sigma`` (their units; independent errors) instead
-    of fitting them, from ``unc``: the covariance with them fitted by the residuals alone
-    (their columns in the Jacobian, no prior rows for them), taken at the held fit's optimum.
+    measured values of standard deviations ``sigma`` (their units; independent errors), or
+    of ``covariance`` (h, h) when their errors are tied (a film's speed measured in its own
+    lengths, and its scale), instead of fitting them, from ``unc``: the covariance with them
+    fitted by the residuals alone (their columns in the Jacobian, no prior rows for them),
+    taken at the held fit's optimum.
 
     The others were fitted at the held values: their covariance is the conditional one,
     C_oo - C_oh C_hh^-1 C_ho, plus the held values' own errors carried through their optimum's
     dependence on them, G S G^T with G = C_oh C_hh^-1 (the others' shift per unit of each held
-    value) and S the diagonal of the sigma^2. Each held parameter keeps its sigma; its
-    covariance with the others is its column of G times its sigma^2. One degree of freedom
-    more than ``unc`` per parameter held."""
+    value) and S the held values' covariance. Each held parameter keeps its sigma; its
+    covariance with the others is G S. One degree of freedom more than ``unc`` per parameter
+    held."""
     idx = np.atleast_1d(np.asarray(index, dtype=int))
-    var = np.atleast_1d(np.asarray(sigma, dtype=float)) ** 2 * np.ones(len(idx))
+    if covariance is None:
+        s = np.diag(np.atleast_1d(np.asarray(sigma, dtype=float)) ** 2 * np.ones(len(idx)))
+    else:
+        s = np.asarray(covariance, dtype=float).reshape(len(idx), len(idx))
     c = np.asarray(unc.cov, dtype=float)
     g = np.linalg.solve(c[np.ix_(idx, idx)], c[idx, :]).T  # (p, h); a held row is its unit vector
-    cov = c - g @ c[idx, :] + (g * var) @ g.T
+    cov = c - g @ c[idx, :] + g @ s @ g.T
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     scale = np.outer(std, std)  # a value held exactly (sigma 0) is correlated with nothing
     corr = np.divide(cov, scale, out=np.eye(len(std)), where=scale > 0)
