@@ -138,7 +138,7 @@ class FitOptions:
         tied to it: the approach measures speed times scale) carried into the others'
         covariance: fitted, the crash's samples outnumber the approach's 15 to 1 and moved it
         where the model's reading of the crash wanted it (scored world 910028: +1.38 +- 0.36 %,
-        3.9 sigma off). Where the fitted channels alone would put it is reported beside it.
+        3.8 sigma off). Where the fitted channels alone would put it is reported beside it.
         A header's speed (sensors) stays a prior; off, the film's speed is fitted.
     """
 
