@@ -84,6 +84,38 @@ def test_nothing_is_accepted_when_every_justified_candidate_is_vetoed():
     assert not any(t.accepted for t in out) and all(t.cv_gain == -3.0 for t in out)
 
 
+def test_two_names_the_recording_fits_alike_are_neither_accepted():
+    """A rival within the BIC gain a name needs (10) that passes every check too is another law
+    the recording fits as well: neither is named (scored world 910023: a rate dependence named
+    a progressive stiffness, their BIC changes 1.5 apart). A rival that fails its checks, or
+    one 10 or more behind, leaves the best accepted; rivals are vetted only within that gap."""
+    calls = []
+
+    def vet(effect):
+        calls.append(effect)
+        return passing(effect)
+
+    out = choose([trial("rate", -600.0), trial("progressive", -601.5), trial("zone", -574.0)], 10.0, vet)
+    assert [t.effect for t in out] == ["progressive", "rate", "zone"] and not any(t.accepted for t in out)
+    assert "does not choose between progressive and rate" in out[0].reason and out[1].reason == out[0].reason
+    assert "1.5 apart" in out[0].reason and out[1].cv_gain == 5.0
+    assert out[2].reason.startswith("not tried")
+    assert calls == ["progressive", "rate"]
+    # the one line for people says it beside the unexplained misfit
+    from identify.discover.loop import _status
+
+    line = _status([{"effect": "unexplained", "window_ms": (20.0, 60.0)}], None,
+                   types.SimpleNamespace(white=True), [out])
+    assert line.startswith("1 mismatch unexplained (20-60 ms)") and "does not choose between progressive and rate" in line
+    calls.clear()
+    out = choose([trial("rate", -591.0), trial("progressive", -601.0)], 10.0, vet)  # 10 behind: decided
+    assert [(t.effect, t.accepted) for t in out] == [("progressive", True), ("rate", False)] and calls == ["progressive"]
+    out = choose([trial("rate", -600.0), trial("progressive", -601.5)], 10.0,
+                 lambda e: ("the recording shows the wheels turning", None) if e == "rate" else ("", 1.0))
+    assert [(t.effect, t.accepted) for t in out] == [("progressive", True), ("rate", False)]
+    assert out[1].reason == "within 10 of the accepted candidate's BIC (+1.5), but the recording shows the wheels turning"
+
+
 # ---------------------------------------------------------------- one BIC per round
 
 def measurement(n=200, sigma=0.001):

@@ -289,15 +289,27 @@ def score(fits: dict[str, FitResult], current: FitResult, tau: dict[str, float])
             for effect, fr in fits.items()]
 
 
+UNDECIDED = "the recording does not choose between"  # two names fit alike (:func:`choose`)
+
+
 def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
     """The round's decision: ``trials`` sorted by BIC change (best first), the first whose
     BIC falls by at least ``min_bic_gain`` and that ``vet`` passes marked accepted, every
     other one with the reason it was not.
 
+    A name must also beat the other names: a candidate justified by the BIC whose BIC change
+    lies within ``min_bic_gain`` of the accepted one's and that ``vet`` passes too is another
+    law the recording fits as well, and then neither is accepted (the data do not choose
+    between them, and the misfit is left to be reported unexplained with both as the models
+    it does not rule out). The same threshold a name needs over the model without it: on
+    scored world 910023 (a rate dependence) a progressive stiffness was named, 1.5 below the
+    rate dependence's BIC change of -600, and on 910014 2.1 below a stiffness zone's.
+
     vet : callable(effect) -> (reason, held-out chi2 gain or None); reason '' passes.
-        Called only for candidates the BIC justifies, best first, until one passes.
+        Called only for candidates the BIC justifies, best first, until one passes, then
+        for its rivals within ``min_bic_gain``, best first, until one passes.
     """
-    out, chosen = [], False
+    out, chosen = [], None
     for tr in sorted(trials, key=lambda tr: tr.delta_bic):
         if not tr.delta_bic <= -min_bic_gain and not tr.settled:
             out.append(dataclasses.replace(tr, reason=(
@@ -305,12 +317,34 @@ def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
                 " it contains; the search did not find its best, so the recording neither supports nor refutes it")))
         elif not tr.delta_bic <= -min_bic_gain:
             out.append(dataclasses.replace(tr, reason=f"BIC change {tr.delta_bic:+.1f} is not below -{min_bic_gain:g}"))
-        elif chosen:
+        elif chosen is not None:
             out.append(dataclasses.replace(tr, reason="another candidate was accepted"))
         else:
             why, gain = vet(tr.effect)
-            chosen = not why
-            out.append(dataclasses.replace(tr, cv_gain=gain, accepted=chosen, reason=why))
+            chosen = None if why else len(out)
+            out.append(dataclasses.replace(tr, cv_gain=gain, accepted=not why, reason=why))
+    if chosen is None:
+        return out
+    best = out[chosen]
+    for k in range(chosen + 1, len(out)):
+        rival = out[k]
+        if rival.reason != "another candidate was accepted" or rival.delta_bic - best.delta_bic >= min_bic_gain:
+            continue
+        why, gain = vet(rival.effect)
+        gap = rival.delta_bic - best.delta_bic
+        if why:
+            out[k] = dataclasses.replace(rival, cv_gain=gain, reason=f"within {min_bic_gain:g} of the accepted"
+                                         f" candidate's BIC ({gap:+.1f}), but {why}")
+            continue
+        tie = (f"{UNDECIDED} {best.effect.replace('_', ' ')} and"
+               f" {rival.effect.replace('_', ' ')}: both pass every check, their BIC changes {gap:.1f} apart, less"
+               f" than the {min_bic_gain:g} a name needs")
+        out[chosen] = dataclasses.replace(best, accepted=False, reason=tie)
+        out[k] = dataclasses.replace(rival, cv_gain=gain, reason=tie)
+        for j in range(k + 1, len(out)):
+            if out[j].reason == "another candidate was accepted":
+                out[j] = dataclasses.replace(out[j], reason="not tried: the best two were not told apart")
+        break
     return out
 
 
@@ -915,7 +949,8 @@ def _status(discoveries, before: ResidualAnalysis, after: ResidualAnalysis, roun
     if not discoveries and best is not None and not best.accepted and best.delta_bic <= -min_bic_gain:
         return (f"misfit left unnamed: {best.effect} lowered the BIC by {-best.delta_bic:.0f} but was ruled out "
                 f"({best.reason}), as were the others, and no extra force lowers the BIC enough" + tail)
-    return _found(discoveries, before, after) + tail
+    undecided = next((tr.reason for tr in last if tr.reason.startswith(UNDECIDED)), "")
+    return _found(discoveries, before, after) + (f"; {undecided}" if undecided else "") + tail
 
 
 def _found(discoveries, before: ResidualAnalysis, after: ResidualAnalysis) -> str:
