@@ -826,9 +826,24 @@ def travel_axes(points: np.ndarray, stop: int, direction: int) -> tuple[np.ndarr
 # ----------------------------------------------------------------------- contact
 
 
+def weighted_line(t: np.ndarray, x: np.ndarray, sigma: np.ndarray) -> tuple[float, float, float]:
+    """A straight line fitted to ``x`` against ``t``, each point weighted by 1 / ``sigma``.
+
+    Returns (slope (x unit per t unit), its standard deviation were the sigmas right and the
+    points independent, the reduced chi-square of the residuals (at least 1))."""
+    ss = np.maximum(sigma, 1e-9)
+    design = np.stack([np.ones_like(t), t - t.mean()], axis=1) / ss[:, None]
+    coef, *_ = np.linalg.lstsq(design, x / ss, rcond=None)
+    cov = np.linalg.inv(design.T @ design)
+    res = (x - (coef[0] + coef[1] * (t - t.mean()))) / ss
+    chi = max(1.0, float(np.sum(res**2)) / max(len(t) - 2, 1))
+    return float(coef[1]), float(np.sqrt(cov[1, 1])), chi
+
+
 def impact_speed(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, stop: int
                  ) -> tuple[float, float]:
-    """Speed from a weighted line fit to ``x`` over the frames before ``stop``.
+    """Speed from a weighted line fit to ``x`` over the frames before ``stop``
+    (:func:`weighted_line`, its sigma widened by the residuals' reduced chi-square).
 
     Parameters
     ----------
@@ -846,13 +861,8 @@ def impact_speed(t: np.ndarray, x: np.ndarray, sigma: np.ndarray, stop: int
     if ok.sum() < 3:
         raise VideoError(f"only {int(ok.sum())} frames before contact have the car's position; "
                          "the impact speed needs at least 3 (give --speed)")
-    tt, xx, ss = t[:stop][ok], x[:stop][ok], np.maximum(sigma[:stop][ok], 1e-9)
-    A = np.stack([np.ones_like(tt), tt - tt.mean()], axis=1) / ss[:, None]
-    coef, *_ = np.linalg.lstsq(A, xx / ss, rcond=None)
-    cov = np.linalg.inv(A.T @ A)
-    res = (xx - (coef[0] + coef[1] * (tt - tt.mean()))) / ss
-    chi = max(1.0, float(np.sum(res**2)) / max(len(tt) - 2, 1))
-    return float(coef[1]), float(np.sqrt(cov[1, 1] * chi))
+    speed, sd, chi = weighted_line(t[:stop][ok], x[:stop][ok], sigma[:stop][ok])
+    return speed, float(sd * np.sqrt(chi))
 
 
 #: Exponent of the onset model ``x = a + b (t - tc) - c max(0, t - tc)^p``: 3, a force growing

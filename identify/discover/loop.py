@@ -290,6 +290,7 @@ def score(fits: dict[str, FitResult], current: FitResult, tau: dict[str, float])
 
 
 UNDECIDED = "the recording does not choose between"  # two names fit alike (:func:`choose`)
+OTHER_ACCEPTED = "another candidate was accepted"
 
 
 def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
@@ -318,7 +319,7 @@ def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
         elif not tr.delta_bic <= -min_bic_gain:
             out.append(dataclasses.replace(tr, reason=f"BIC change {tr.delta_bic:+.1f} is not below -{min_bic_gain:g}"))
         elif chosen is not None:
-            out.append(dataclasses.replace(tr, reason="another candidate was accepted"))
+            out.append(dataclasses.replace(tr, reason=OTHER_ACCEPTED))
         else:
             why, gain = vet(tr.effect)
             chosen = None if why else len(out)
@@ -328,7 +329,7 @@ def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
     best = out[chosen]
     for k in range(chosen + 1, len(out)):
         rival = out[k]
-        if rival.reason != "another candidate was accepted" or rival.delta_bic - best.delta_bic >= min_bic_gain:
+        if rival.reason != OTHER_ACCEPTED or rival.delta_bic - best.delta_bic >= min_bic_gain:
             continue
         why, gain = vet(rival.effect)
         gap = rival.delta_bic - best.delta_bic
@@ -342,7 +343,7 @@ def choose(trials: list[Trial], min_bic_gain: float, vet) -> list[Trial]:
         out[chosen] = dataclasses.replace(best, accepted=False, reason=tie)
         out[k] = dataclasses.replace(rival, cv_gain=gain, reason=tie)
         for j in range(k + 1, len(out)):
-            if out[j].reason == "another candidate was accepted":
+            if out[j].reason == OTHER_ACCEPTED:
                 out[j] = dataclasses.replace(out[j], reason="not tried: the best two were not told apart")
         break
     return out
@@ -885,12 +886,9 @@ def against_what_was_measured(values: dict[str, float], current: FitResult) -> b
     seen) counts at where it was held and how well (``held_std``): when the scale was first
     held, the guard no longer saw it, and on scored world 910015 (clean) the force's refit,
     60 % off in speed, widened the reported speed's std to 38 km/h."""
-    measured = {**{n: (h.get("held_at", h["measured"]), h.get("held_std", h["sigma"]))
-                   for n, h in current.held_measured.items()}, **current.priors}
-    for name, (mu, sigma) in measured.items():
-        if name in values and name in current.values and sigma > 0:
-            if abs(values[name] - mu) > abs(current.values[name] - mu) + FitResult.PULL_CONFLICT * sigma:
-                return True
+    for name, (mu, sigma) in current.measured().items():
+        if name in values and abs(values[name] - mu) > abs(current.values[name] - mu) + FitResult.PULL_CONFLICT * sigma:
+            return True
     return False
 
 

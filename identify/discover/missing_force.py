@@ -157,8 +157,8 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
     n_eff = len(b) / tau
     # what was measured before the fit stays near its measurement: a row (shift / sigma) each,
     # times sqrt(tau) so that it counts in full where the x rows count as n / tau
-    sigma = measured_sigmas(fr)
-    held = [(k, sigma[n]) for k, n in enumerate(fr.names) if n in sigma]
+    measured = fr.measured()
+    held = [(k, measured[n][1]) for k, n in enumerate(fr.names) if n in measured]
     rows = np.zeros((len(held), sens.shape[1]))
     for r_i, (k, sd) in enumerate(held):
         rows[r_i, k] = math.sqrt(tau) / sd
@@ -237,15 +237,6 @@ def estimate_missing_force(fr, analysis, vehicle, min_bic_gain: float = 10.0, kn
         description=description,
         parameter_shift={n: float(c) for n, c in zip(fr.names, coef_all[k_f:])},
     )
-
-
-def measured_sigmas(fr) -> dict[str, float]:
-    """name -> sigma (its unit) of each fitted quantity of ``fr`` measured before the fit: a
-    held measurement's (``FitResult.held_measured``: where it is held, and how well), a
-    prior's (``FitResult.priors``)."""
-    out = {n: float(h.get("held_std", h["sigma"])) for n, h in fr.held_measured.items()}
-    out.update({n: float(sd) for n, (_, sd) in fr.priors.items()})
-    return {n: sd for n, sd in out.items() if sd > 0 and n in fr.names}
 
 
 def describe(t_ms: np.ndarray, force: np.ndarray, window, fr, after_separation: bool = False) -> str:

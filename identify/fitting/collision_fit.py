@@ -119,7 +119,7 @@ class FitOptions:
         no prior, to find where the fitted channels alone put it, reported in
         ``FitResult.held_measured`` and ``FitResult.pulls``: a held contact is then held
         where the two combined put it (inverse-variance mean, the channels' estimate with the
-        model's own error, ``CONTACT_FROM_MOTION``), a held scale stays where it was
+        model's own error, ``CONTACT_FROM_MOTION``), a held scale or speed stays where it was
         measured; off, both are held where they were measured, not compared (the fits after
         the base one, whose measured contact is where the base fit held it: one solve fewer
         each).
@@ -280,6 +280,14 @@ class FitResult:
                              "conflict": bool(abs(pull) > self.PULL_CONFLICT)}
         return out
 
+    def measured(self) -> dict[str, tuple[float, float]]:
+        """name -> (value, sigma), its units, of each fitted quantity measured before the fit:
+        a held measurement where it was held and how well (``held_measured``), a prior
+        (``priors``); what discovery's alternatives must not move (``identify.discover``)."""
+        out = {n: (h.get("held_at", h["measured"]), h.get("held_std", h["sigma"])) for n, h in self.held_measured.items()}
+        out.update(self.priors)
+        return {n: (float(mu), float(sd)) for n, (mu, sd) in out.items() if sd > 0 and n in self.values}
+
     @property
     def rms_m(self) -> float:
         return self.rms.get("x_m", float("nan"))
@@ -309,14 +317,13 @@ def approach_speed(measurement: Measurement) -> tuple[float, float]:
             f"{measurement.source}: the impact speed is unknown and fewer than {MIN_BEFORE_CONTACT} samples precede"
             " contact; give it with --speed (km/h)"
         )
-    t, x = np.asarray(measurement.t)[before], np.asarray(measurement.channels["x_m"])[before]
-    w = 1.0 / np.maximum(np.asarray(measurement.sigma["x_m"])[before], 1e-12)
-    design = np.stack([np.ones_like(t), t - t.mean()], axis=1) * w[:, None]
-    coef, *_ = np.linalg.lstsq(design, x * w, rcond=None)
-    slope = float(coef[1])
+    from video.motion import weighted_line
+
+    slope, sd, _ = weighted_line(np.asarray(measurement.t)[before], np.asarray(measurement.channels["x_m"])[before],
+                                 np.asarray(measurement.sigma["x_m"])[before])
     if not slope > 0:
         raise UserError(f"{measurement.source}: the car does not move towards the barrier before contact")
-    return slope, float(np.sqrt(np.linalg.inv(design.T @ design)[1, 1]))
+    return slope, sd
 
 
 def _stack(measurement: Measurement):
@@ -867,7 +874,7 @@ def fit(
     unc = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), groups, n_res,
                                per_channel=options.misfit_weights, tau_at_least=approach_tau_floor(groups))
     by_channel = None  # FitResult.std_data_by_channel: the same optimum, each channel widened by its own misfit
-    own = weighting_groups(channels, w, np.asarray(measurement.t))
+    own = groups if options.misfit_weights else weighting_groups(channels, w, np.asarray(measurement.t))
     if not options.misfit_weights:
         by_channel = parameter_covariance(r, jac_u, dvalue_du, np.array([p.typical for p in free]), own, n_res,
                                           per_channel=True, tau_at_least=approach_tau_floor(own))
