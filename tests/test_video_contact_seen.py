@@ -59,7 +59,8 @@ def test_the_stop_is_found_between_frames_with_an_honest_sigma():
 def test_a_front_end_that_never_stops_gains_nothing():
     t, rigid, _, sig = _series()
     seen = rigid + 2.0 + np.random.default_rng(3).normal(0, 0.3, len(t))
-    assert stop_time(t, rigid, seen, sig, 0.02 / FPS)[3] < MIN_CHI2_GAIN
+    found = stop_time(t, rigid, seen, sig, 0.02 / FPS)
+    assert found is None or found[3] < MIN_CHI2_GAIN
 
 
 def test_debris_ahead_of_the_stopped_front_end_does_not_move_the_stop():
@@ -74,6 +75,39 @@ def test_too_few_frames_after_the_stop_say_nothing():
     found = stop_time(t[:12], rigid[:12], seen[:12], sig[:12], 0.02 / FPS)
     assert found is None or found[3] < MIN_CHI2_GAIN
 
+
+
+def test_a_stop_shown_by_two_frames_among_outliers_is_none():
+    """A codec's smeared edge (development film 960032): the front followed with the cell
+    up to its last frames, two of which fall 1-2 px behind the rigid path, and lost after
+    them. Only two of the four frames after any stop there lie on it: no stop."""
+    t, rigid, seen, sig = _series(ts=1.0, n=24, v=1.25, noise=0.3, seed=5)
+    seen[19:21] -= [2.4, 1.6]  # 1.6 and 0.9 px behind where the picture's front had stood
+    seen[21:] = np.nan
+    found = stop_time(t, rigid, seen, sig, 0.02 / FPS)
+    assert found is None
+    # four frames after it on the stop, two outliers among them, are one; unless an outlier
+    # is the frame next to the stop, which places it
+    t, rigid, seen, sig = _series(ts=0.0185, n=26, v=1.25, noise=0.3, seed=5)
+    seen[[20, 22]] += 1.5
+    found = stop_time(t, rigid, seen, sig, 0.02 / FPS)
+    assert found is not None and found[0] == pytest.approx(0.0185, abs=0.5e-3)
+
+
+def test_a_stop_is_not_placed_after_a_frame_that_shows_the_front_stopped():
+    """Development film 960011 (500 fps, contact at 28 ms): the most forward rows' front
+    against the rigidly carried one. The frame at 30 ms shows the front 5 px ahead of the
+    rigid path (it has stopped); the front then scatters by +-5 px (the crushing nose, debris).
+    A stop at 30.9 ms fits the scattered frames after it as well, with the 30 ms frame an
+    outlier: no stop may be placed after the frame next to it that contradicts it."""
+    t = np.arange(2.0, 46.0, 2.0) * 1e-3
+    rigid = np.array([219.77, 213.85, 207.89, 201.94, 195.96, 190.02, 184.06, 178.09, 172.14, 166.18, 160.22,
+                      154.27, 148.32, 142.35, 136.47, 130.58, 124.68, 118.83, 113.08, 107.54, 101.98, 96.48])
+    seen = np.array([np.nan, np.nan, 208.39, 202.89, 197.03, 191.20, 184.86, 178.98, 173.01, 167.02, 161.04,
+                     155.20, 149.43, 143.31, 142.27, 139.47, 130.25, 132.00, 133.74, 135.51, 135.38, 131.46])
+    sig = np.array([np.nan, np.nan, *[0.3] * 15, 1.18, 0.85, 0.93, 0.47, 0.90])
+    found = stop_time(t, rigid, seen, sig, 0.02 / 500.0)
+    assert found is None or found[0] < 0.030
 
 def _background(h=60, w=200, seed=0):
     rng = np.random.default_rng(seed)
@@ -186,7 +220,7 @@ def test_debris_joined_to_the_most_forward_rows_short_of_the_cells_nose_does_not
     # the most forward rows seem to stop where it stands, 1.8 frames late; but the rows'
     # median (which stands behind the tip and stops after it) stopped first
     seen = _see_drawn(0.024, debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0), debris_from=23)
-    assert seen.kind == "seen" and "went on past where it stood" in seen.note
+    assert seen.kind == "seen" and "median front is followed" in seen.note
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
 
 
@@ -370,7 +404,7 @@ def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping(
     seen = _see_drawn(0.024, stop_frame=np.inf, barrier_from=175)
     # the car is followed on over the barrier's grey where it differs from it, and lost where
     # it does not: no stop is claimed at the barrier's edge
-    assert seen.kind == "not_seen" and "does not stop" in seen.note
+    assert seen.kind == "not_seen" and ("does not stop" in seen.note or "no clean stop" in seen.note)
 
 
 def test_the_noise_ahead_of_the_front_is_the_backgrounds_not_the_moving_edges():

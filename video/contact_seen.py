@@ -209,8 +209,9 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
         chi-square when above 1), the stop column px, and how much the stop lowers the
         chi-square on those frames against a front end that never stops, and the reduced
         chi-square of the stop on them (outliers left out). None when no
-        window has :data:`MIN_FRAMES_EACH_SIDE` seen frames on either side of the stop, or
-        the best has too many outliers.
+        window has :data:`MIN_FRAMES_EACH_SIDE` seen frames on either side of the stop that
+        its model does not call outliers, the frames next to it among them, or the best has
+        too many outliers.
     """
     ok = np.isfinite(u_rigid) & np.isfinite(u_seen) & np.isfinite(sigma) & (sigma > 0)
     if ok.sum() < 2 * MIN_FRAMES_EACH_SIDE:
@@ -219,21 +220,27 @@ def stop_time(t: np.ndarray, u_rigid: np.ndarray, u_seen: np.ndarray, sigma: np.
     dt = float(np.median(np.diff(t)))
     grid = np.arange(tt[0], tt[-1], step_s)
     stop_u = np.interp(grid, tt, ur)
-    res = us[None, :] - np.where(tt[None, :] < grid[:, None], ur[None, :], stop_u[:, None])
+    early = tt[None, :] < grid[:, None]
+    res = us[None, :] - np.where(early, ur[None, :], stop_u[:, None])
     inside = (tt[None, :] >= grid[:, None] - FRAMES_BEFORE * dt) & (tt[None, :] < grid[:, None] + FRAMES_AFTER * dt)
-    before = np.sum(inside & (tt[None, :] < grid[:, None]), axis=1)
-    after = np.sum(inside & (tt[None, :] >= grid[:, None]), axis=1)
     n_in = np.sum(inside, axis=1)
-    valid = (before >= MIN_FRAMES_EACH_SIDE) & (after >= MIN_FRAMES_EACH_SIDE)
-    if not valid.any():
-        return None
     # robustly: c the window's median offset, every frame's chi-square capped at OUTLIER^2
     # (debris in front of the car, a row of background that changed)
     c = np.nanmedian(np.where(inside, res, np.nan), axis=1)
     z2 = w[None, :] * (res - c[:, None]) ** 2
+    # a stop is shown by frames on its model on each side of it, outliers not counted (two
+    # frames after it that fall behind the rigid path, a codec's smeared edge, the front lost
+    # after them, are no front standing still), the two next to it among them: they place it
+    kept = inside & (z2 <= OUTLIER**2)
+    n_before = np.sum(early, axis=1)
+    rows = np.arange(len(grid))
+    valid = ((np.sum(kept & early, axis=1) >= MIN_FRAMES_EACH_SIDE) & (np.sum(kept & ~early, axis=1) >= MIN_FRAMES_EACH_SIDE)
+             & kept[rows, np.maximum(n_before - 1, 0)] & kept[rows, np.minimum(n_before, len(tt) - 1)])
+    if not valid.any():
+        return None
     score = np.where(valid, np.sum(np.minimum(z2, OUTLIER**2) * inside, axis=1) / np.maximum(n_in - 2, 1), np.inf)
     j = int(np.argmin(score))
-    mask = inside[j] & (z2[j] <= OUTLIER**2)
+    mask = kept[j]
     if np.sum(inside[j] & ~mask) > MAX_OUTLIER_SHARE * n_in[j]:
         return None  # the frames do not look like a front end that stops
     # the profile on the best window's frames, outliers left out
