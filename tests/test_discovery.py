@@ -130,6 +130,29 @@ def test_a_candidate_a_generic_force_explains_far_better_is_not_named(a4, block_
     assert len(taus) == 1 and taus[0] >= 1.0  # once per round, counted with the round's tau
 
 
+def test_a_candidate_that_does_not_hold_in_the_fit_as_reported_is_not_named(a4, block_case, monkeypatch):
+    """The finding is vetted again in the fit that would be reported (each channel weighted
+    by its own misfit, the contact held): made to fail there alone, blocking, named on its
+    own fit, is not named, with the reason; the reported fit is the base model's."""
+    import identify.discover.loop as discovery
+
+    _, m, _, base = block_case
+    vetted = []
+
+    def plausible(effect, fr, vehicle):
+        vetted.append(bool(fr.sigma_widened))
+        return "front_wheel_block.depth ran off (made so here)" if fr.sigma_widened else ""
+
+    monkeypatch.setattr(discovery, "_plausible", plausible)
+    monkeypatch.setattr(discovery, "CANDIDATES", (discovery.BY_EFFECT["front_wheel_block"],))
+    result = discover(m, a4, base)
+    block = next(t for t in result.rounds[0] if t.effect == "front_wheel_block")
+    assert not block.accepted and block.reason.startswith(discovery.AS_REPORTED), block
+    assert block.reason.endswith("front_wheel_block.depth ran off (made so here)")
+    assert vetted == [False, True]  # its own fit, then the fit as reported
+    assert "front_wheel_block" not in result.effects and result.final.model == "base"
+
+
 def test_a_force_no_candidate_has_is_reported_unexplained(a4, unexplained_case):
     _, result = unexplained_case
     assert [d["effect"] for d in result.discoveries] == ["unexplained"], (result.status, result.rounds)
