@@ -76,7 +76,6 @@ def test_too_few_frames_after_the_stop_say_nothing():
     assert found is None or found[3] < MIN_CHI2_GAIN
 
 
-
 def test_a_stop_shown_by_two_frames_among_outliers_is_none():
     """A codec's smeared edge (development film 960032): the front followed with the cell
     up to its last frames, two of which fall 1-2 px behind the rigid path, and lost after
@@ -108,6 +107,7 @@ def test_a_stop_is_not_placed_after_a_frame_that_shows_the_front_stopped():
     sig = np.array([np.nan, np.nan, *[0.3] * 15, 1.18, 0.85, 0.93, 0.47, 0.90])
     found = stop_time(t, rigid, seen, sig, 0.02 / 500.0)
     assert found is None or found[0] < 0.030
+
 
 def _background(h=60, w=200, seed=0):
     rng = np.random.default_rng(seed)
@@ -217,8 +217,9 @@ def test_debris_joined_to_the_front_in_most_rows_brackets_the_contact():
 def test_debris_joined_to_the_most_forward_rows_short_of_the_cells_nose_does_not_delay_the_stop():
     # the fragment shows from frame 23, 2.6 frames after the stop, when the cell's nose has
     # gone 6.5 px on: 4.5 px ahead of the stopped front it stands where the car can be, and
-    # the most forward rows seem to stop where it stands, 1.8 frames late; but the rows'
-    # median (which stands behind the tip and stops after it) stopped first
+    # the most forward rows seem to stop where it stands, 1.8 frames late, but the frame
+    # next to that stop contradicts it (no clean stop there): the rows' median is followed,
+    # which stands behind the tip and stops with it
     seen = _see_drawn(0.024, debris_rows=slice(22, 36), bg=np.full((80, 300), 60.0), debris_from=23)
     assert seen.kind == "seen" and "median front is followed" in seen.note
     assert seen.time_s == pytest.approx(0.0204, abs=0.3e-3)
