@@ -59,8 +59,7 @@ def test_the_stop_is_found_between_frames_with_an_honest_sigma():
 def test_a_front_end_that_never_stops_gains_nothing():
     t, rigid, _, sig = _series()
     seen = rigid + 2.0 + np.random.default_rng(3).normal(0, 0.3, len(t))
-    found = stop_time(t, rigid, seen, sig, 0.02 / FPS)
-    assert found is None or found[3] < MIN_CHI2_GAIN
+    assert stop_time(t, rigid, seen, sig, 0.02 / FPS) is None  # no window has frames on a stop after it
 
 
 def test_debris_ahead_of_the_stopped_front_end_does_not_move_the_stop():
@@ -405,7 +404,7 @@ def test_a_car_passing_in_front_of_a_barrier_as_grey_as_it_is_not_seen_stopping(
     seen = _see_drawn(0.024, stop_frame=np.inf, barrier_from=175)
     # the car is followed on over the barrier's grey where it differs from it, and lost where
     # it does not: no stop is claimed at the barrier's edge
-    assert seen.kind == "not_seen" and ("does not stop" in seen.note or "no clean stop" in seen.note)
+    assert seen.kind == "not_seen" and "shows no clean stop" in seen.note
 
 
 def test_the_noise_ahead_of_the_front_is_the_backgrounds_not_the_moving_edges():

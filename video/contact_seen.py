@@ -663,7 +663,7 @@ def see_contact(frame_at: Callable[[int], np.ndarray], t: np.ndarray, pose: Body
             late_s = max(found[0] - t_ahead, 0.0) + 1.0 / fps
             joined = (f"{stood}, and their median shows no clean stop: the stop may be up to "
                       f"{late_s * 1e3:.2f} ms late, which the sigma counts")
-    which = ", neither in its most forward rows nor in their median," if joined else ""
+    which = ", neither in its most forward rows nor in their median" if joined else ""
     # the front followed stood ahead of where the car can be before the stop it shows (or,
     # with no clean stop, before it stood behind the rigid path): what stopped there is not
     # the car's front alone; the contact is bracketed from the frames before instead

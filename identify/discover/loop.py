@@ -645,7 +645,9 @@ def discover(
 
     def reported_fit(active, initial):
         """The model with the mechanisms ``active`` fitted as it is reported: each channel
-        weighted by its own misfit, the contact held where the recording measured it."""
+        weighted by its own misfit, the contact held where the recording measured it. One fit
+        per set of mechanisms, from ``initial`` the first time (a set is started from its one
+        candidate fit: the vet's and the final model's are the same)."""
         key = tuple(active)
         if key not in reported_fits:
             reported_fits[key] = run_to_convergence(active, dict(initial), opts=dataclasses.replace(

@@ -58,6 +58,7 @@ from identify.fitting.model import (
 )
 from sim import Params, Solver, Vehicle, make_params
 from sim.simulate import _run
+from video.motion import weighted_line
 
 FIT_CHANNELS = ("x_m", "z_m", "pitch_rad", "vx_mps", "front_wheel_angle_rad", "rear_wheel_angle_rad",
                 "engine_x_m", "engine_vx_mps")
@@ -317,8 +318,6 @@ def approach_speed(measurement: Measurement) -> tuple[float, float]:
             f"{measurement.source}: the impact speed is unknown and fewer than {MIN_BEFORE_CONTACT} samples precede"
             " contact; give it with --speed (km/h)"
         )
-    from video.motion import weighted_line
-
     slope, sd, _ = weighted_line(np.asarray(measurement.t)[before], np.asarray(measurement.channels["x_m"])[before],
                                  np.asarray(measurement.sigma["x_m"])[before])
     if not slope > 0:
