@@ -148,7 +148,11 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
         row["discovered"] = [d["effect"] for d in doc.get("discoveries", [])]
         # a second body the recording measured (engine accelerometers) is modelled, not discovered
         row["measured_effects"] = [e for e in doc["fit"]["model"].split("+")[1:] if e not in row["discovered"]]
-        row["verdict"] = judge_discoveries(row["discovered"], [e["name"] for e in truth["effects"]])
+        # an effect the fitted base model shows by itself and no measured channel contradicts (the
+        # rear wheels lifted by the force plane) is named as a discovery is, right or wrong alike
+        row["shown"] = [e["effect"] for e in doc.get("shown_by_model", []) if not e["contradicted"]]
+        row["shown_evidence"] = [e["evidence"] for e in doc.get("shown_by_model", [])]
+        row["verdict"] = judge_discoveries(row["discovered"] + row["shown"], [e["name"] for e in truth["effects"]])
         # candidates whose fit ended worse than the model they extend: never asked (``Trial.settled``)
         row["unsettled"] = sorted({t["effect"] for r in doc.get("discovery_rounds", []) for t in r
                                    if not t.get("settled", True)})
@@ -185,10 +189,11 @@ def print_table(rows: list[dict]) -> None:
             f = "{:+.1f}" if name not in ABSOLUTE else ("{:+.3f}")
             z = _cell(p.get("z"), "{:+.1f}")
             cells.append(f"{_cell(p['err'], f)} ({z}){'' if p['identified'] else ' n.i.'}")
+        found = r["discovered"] + [e + " (model)" for e in r.get("shown", [])]  # shown by the base model itself
         print(f"| {r['seed']} | {r['effect']} | {r['vehicle']} | {_footage(r)} | {_cell(tr.get('x_rms_mm'), '{:.2f}')} | "
               f"{_cell(tr.get('measured_share'), '{:.2f}')} | {_cell(tr.get('video_contact_time_err_ms'))}/"
               f"{_cell(r.get('fit_contact_err_ms'))} | {_cell(r['speed_err_pct'], '{:+.2f}')} | "
-              + " | ".join(cells) + f" | {','.join(r['discovered']) or '-'} | {r['verdict']} | {r['t_fit_s']:.0f} |")
+              + " | ".join(cells) + f" | {','.join(found) or '-'} | {r['verdict']} | {r['t_fit_s']:.0f} |")
 
 
 def _footage(r: dict) -> str:

@@ -115,6 +115,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
     ``vehicle_ref`` is what ``--vehicle`` must be given to load the vehicle again (its name,
     or the path of a file outside ``data/vehicles/``; default the name)."""
     from identify.discover.candidates import assumed_in_base
+    from identify.discover.shown import effects_shown
     from sim import events_ms
 
     params = {}
@@ -181,6 +182,8 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         "priors": fr.pulls(),
         "discoveries": list(discoveries),
         "discovery_status": discovery_status,
+        # a candidate's effect the fitted base model shows by itself (the rear wheels lifted)
+        "shown_by_model": effects_shown(fr, vehicle, [d["effect"] for d in discoveries]),
         "events_ms": dict(fr.measurement.events_ms),
         "model_events_ms": model_events,
         "notes": list(fr.measurement.notes) + _second_body_notes(fr, recording),

@@ -50,6 +50,11 @@ def test_result_json_has_the_interface_fields(fitted_folder):
     cov = np.array(doc["covariance"]["matrix"])
     assert cov.shape == (len(doc["covariance"]["names"]),) * 2 and np.allclose(cov, cov.T)
     assert set(doc["model_events_ms"]) >= {"rear_wheel_lift", "compression_end"}
+    # that lift is the base model's own, named as an effect it shows, from the lift on
+    [shown] = doc["shown_by_model"]
+    assert shown["effect"] == "rear_axle_lift" and not shown["contradicted"]
+    assert shown["window_ms"][0] == pytest.approx(doc["model_events_ms"]["rear_wheel_lift"], abs=1.0)
+    assert "**rear_axle_lift**, in the fitted model" in (fitted_folder / "report.md").read_text()
     # each fitted channel's misfit factor (at least 1) and, for those widened, its weight's
     # (a channel's samples before contact weighted apart: "x_m before contact")
     misfit, widened = doc["fit"]["misfit_by_channel"], doc["fit"]["sigma_widened_by_channel"]

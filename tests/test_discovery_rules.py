@@ -511,6 +511,33 @@ def test_three_hub_samples_in_the_window_are_enough_to_judge(a4):
     assert why == "" and "does not show the rear hub's height" in seen
 
 
+def test_a_rear_lift_the_base_model_shows_is_named_with_its_window_and_evidence(a4):
+    from identify.discover.shown import effects_shown
+
+    [e] = effects_shown(lift_recording(0.05), a4)
+    # lifted over the whole model clock (0-100 ms), contact 2 ms after the recording's zero,
+    # clipped to the recording's end
+    assert e["effect"] == "rear_axle_lift" and e["window_ms"] == [2.0, 100.0]
+    assert e["evidence"].startswith("seen:") and e["contradicted"] is False
+    assert "lifts them by itself" in e["explanation"]
+
+
+def test_a_rear_lift_the_hub_refutes_is_a_conflict_not_an_effect(a4):
+    from identify.discover.shown import effects_shown
+
+    [e] = effects_shown(lift_recording(0.0), a4)
+    assert e["contradicted"] is True and "shows the rear hub on the ground" in e["evidence"]
+
+
+def test_no_effect_is_shown_where_the_model_keeps_the_rear_down_or_discovery_named_it(a4):
+    from identify.discover.shown import effects_shown
+
+    fr = lift_recording(0.05)
+    assert effects_shown(fr, a4, ["rear_axle_lift"]) == []
+    fr.trajectory.rear_margin = np.ones(101)
+    assert effects_shown(fr, a4) == []
+
+
 def test_the_hub_is_compared_with_the_lift_on_the_models_clock(a4):
     """The model's clock starts at contact, 2 ms after the recording's zero: a hub that rises
     exactly as the model lifts the wheel, read on that clock, fits it to chi2 0."""
@@ -547,6 +574,28 @@ def test_wheels_seen_blocked_are_a_finding_whatever_the_spread_of_the_depth(a4):
         "front_wheel_block", wheel_recording(0.0, 0.20, with_angle=False, depth_std=0.15), a4)
     assert "depth is not determined" in _plausible(  # standing still cannot be told from rolling
         "front_wheel_block", wheel_recording(0.0, 0.001, depth_std=0.15), a4)
+
+
+def test_only_a_candidate_a_measured_channel_shows_acting_is_spared_the_own_misfit_rule(a4):
+    """The blocked fit's gain, 0.25 off x's chi2, is far below the 10 the own-misfit rule asks;
+    the hubs seen standing still while the car moves make it a finding all the same, a
+    blocking no channel shows (or one the hubs refute) does not."""
+    from identify.discover.loop import refusal, seen_acting
+
+    rolling = 0.20 / float(a4.wheel_radius)
+    seen, unseen, refuted = (wheel_recording(0.01, 0.20), wheel_recording(0.0, 0.20, with_angle=False),
+                             wheel_recording(0.8 * rolling, 0.20))
+    assert seen_acting("front_wheel_block", seen, a4)
+    assert not seen_acting("front_wheel_block", unseen, a4) and not seen_acting("front_wheel_block", refuted, a4)
+    assert seen_acting("rear_axle_lift", lift_recording(0.05), a4)
+    assert not seen_acting("rear_axle_lift", lift_recording(0.0), a4)
+
+    def current_of(fr):  # the model without the blocking: x's chi2 0.25 higher
+        return FakeFit(fr.measurement, {"x_m": np.asarray(fr.measurement.channels["x_m"]) + 0.5e-3 / math.sqrt(101)})
+
+    assert refusal("front_wheel_block", seen, current_of(seen), {}, a4, 10.0) == ""
+    assert "widened by its own misfit" in refusal("front_wheel_block", unseen, current_of(unseen), {}, a4, 10.0)
+    assert "shows the front wheels turning" in refusal("front_wheel_block", refuted, current_of(refuted), {}, a4, 10.0)
 
 
 def test_the_blocking_is_started_where_the_film_saw_the_wheels_stop(a4):

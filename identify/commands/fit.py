@@ -94,6 +94,10 @@ def _run(args: argparse.Namespace, folder) -> int:
         print(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
     for line in prior_lines(doc.get("priors") or {}):
         print(f"  {line}")
+    for e in doc.get("shown_by_model") or []:
+        w = e["window_ms"]
+        print(f"  {e['effect'].replace('_', ' ')} in the fitted model, {w[0]:.0f}-{w[1]:.0f} ms"
+              + (f" (contradicted by the recording: {e['evidence']})" if e["contradicted"] else f" ({e['evidence']})"))
     for warning in doc.get("warnings") or []:
         print(f"warning: {warning}", file=sys.stderr)
     print(f"results: {ident.out}")

@@ -168,6 +168,11 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         lines.append(f"  x RMS {d['rms_before_m'] * 1e3:.2f} -> {d['rms_after_m'] * 1e3:.2f} mm")
         if d.get("evidence"):
             lines.append(f"  Evidence: {d['evidence']}")
+    for e in doc.get("shown_by_model") or []:
+        lines += ["", f"- **{e['effect']}**, in the fitted model without a discovery ({e['window_ms'][0]:.0f}-"
+                  f"{e['window_ms'][1]:.0f} ms): {e['explanation']}"]
+        if e.get("evidence"):
+            lines.append(("  Contradicted by the recording: " if e.get("contradicted") else "  Evidence: ") + e["evidence"])
     check = doc.get("force_check")
     if check:
         lines += _force_check_lines(check, doc)

@@ -131,6 +131,11 @@ class Candidate:
         car has one), every fitted model keeps it, and this is the sentence that says so in
         reports; discovery's candidate is then what the neutral state leaves out (the engine
         reaching the barrier).
+    shown_in_base : '' for a candidate only discovery can add; else the base model can show its
+        effect by itself (the rear wheels lifted by a contact force below the centre of
+        gravity), and this is the sentence that says so: a fitted model where it acts reports
+        it, with its window and its evidence check, as an effect the model shows
+        (``identify.discover.shown``), not as a discovery.
     """
 
     effect: str
@@ -148,6 +153,7 @@ class Candidate:
     measured_starts: tuple[dict[str, float | Callable], ...] = ()
     fixed_when_measured: tuple[str, ...] = ()
     in_base: str = ""
+    shown_in_base: str = ""
 
     @property
     def names(self) -> tuple[str, ...]:
