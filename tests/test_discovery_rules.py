@@ -556,6 +556,18 @@ def test_wheels_seen_standing_while_the_car_moves_support_blocking(a4):
     assert why == "" and seen.startswith("seen:")
 
 
+def test_a_hub_between_the_mechanism_and_its_absence_does_not_decide(a4):
+    """Turning half as far as rolling: standing still and rolling fit alike (chi2 equal), so
+    the blocking is neither refuted nor seen; so for a rear hub rising half the model's lift."""
+    from identify.discover.candidates.rear_axle_lift import rear_wheels_lifted
+
+    rolling = 0.20 / float(a4.wheel_radius)
+    why, line = front_wheels_blocked(wheel_recording(0.5 * rolling, 0.20), a4, (0.0, 100.0))
+    assert why == "" and line.startswith("inferred, not seen") and "fits standing still and rolling alike" in line
+    why, line = rear_wheels_lifted(lift_recording(0.0248, sigma=0.01), a4, (0.0, 100.0))  # half its 49 mm there
+    assert why == "" and line.startswith("inferred, not seen") and "fits the model's lift and the ground alike" in line
+
+
 def test_wheels_seen_turning_refute_blocking(a4):
     rolling = 0.20 / float(a4.wheel_radius)
     why, _ = front_wheels_blocked(wheel_recording(0.8 * rolling, 0.20), a4, (0.0, 100.0))

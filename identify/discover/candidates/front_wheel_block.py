@@ -53,7 +53,9 @@ def front_wheels_blocked(fr, vehicle, window_ms) -> tuple[str, str]:
     """The measured front wheel angle in the window set against standing still and against
     rolling (each with its own constant offset, fitted): the claim stands only when the two
     differ by more than ``DECISIVE_CHI2`` over the window (else no channel can check it) and
-    standing still does not fit worse than rolling by more than that.
+    standing still does not fit worse than rolling by more than that. It is seen only where
+    standing still fits better than rolling by that much; between the two the hub angle does
+    not decide, and the claim is inferred.
     """
     m = fr.measurement
     ok, span = samples_in_window(fr, FRONT_ANGLE, window_ms)
@@ -71,6 +73,9 @@ def front_wheels_blocked(fr, vehicle, window_ms) -> tuple[str, str]:
         return (f"the recording shows the front wheels turning in {span} (turned {np.ptp(angle):.2f} rad; rolling "
                 f"{np.ptp(rolling):.2f} rad), where the candidate has them blocked (chi2 {blocked:.0f} standing "
                 f"against {turning:.0f} rolling)"), ""
+    if turning - blocked < DECISIVE_CHI2:
+        return "", (f"inferred, not seen: the front hub angle in {span} fits standing still and rolling alike (chi2 "
+                    f"{blocked:.0f} standing against {turning:.0f} rolling)")
     return "", (SEEN + f"the front hub angle stands still in {span} (chi2 {blocked:.0f} standing against "
                 f"{turning:.0f} rolling, over {int(ok.sum())} samples)")
 

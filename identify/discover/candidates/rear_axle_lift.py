@@ -40,9 +40,9 @@ def same_as_vehicle_file(fr, vehicle) -> str:
 def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
     """The measured rear hub height in the window set against the fitted model's rear-wheel
     lift and against staying on the ground (each about its own constant, fitted): the lift is
-    refuted when the ground fits better by more than ``DECISIVE_CHI2``; where the two cannot
-    be told apart by that much, or no hub is tracked, the lift is inferred from the body's
-    motion, not seen."""
+    refuted when the ground fits better by more than ``DECISIVE_CHI2``, and seen only where the
+    lift fits better by that much; where the two cannot be told apart by that much, or no hub
+    is tracked, the lift is inferred from the body's motion, not seen."""
     m = fr.measurement
     ok, span = samples_in_window(fr, REAR_HEIGHT, window_ms)
     if ok.sum() < 3:
@@ -59,6 +59,9 @@ def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
         return (f"the recording shows the rear hub on the ground in {span} (it rose {1e3 * np.ptp(height):.0f} mm;"
                 f" the candidate lifts it {1e3 * np.ptp(lift):.0f} mm: chi2 {lifted:.0f} lifted against"
                 f" {grounded:.0f} on the ground)"), ""
+    if grounded - lifted < DECISIVE_CHI2:
+        return "", (f"inferred, not seen: the rear hub's height in {span} fits the model's lift and the ground alike"
+                    f" (chi2 {lifted:.0f} lifted against {grounded:.0f} on the ground)")
     return "", (SEEN + f"the rear hub rises with the model's lift in {span} (chi2 {lifted:.0f} lifted against"
                 f" {grounded:.0f} on the ground, over {int(ok.sum())} samples)")
 
