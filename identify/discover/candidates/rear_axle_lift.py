@@ -10,9 +10,9 @@ wheels; a hub seen staying on the ground refutes the lift.
 
 The base model lifts the rear wheels by itself when the contact force acts far enough below
 the centre of gravity (``Candidate.shown_in_base``): on 86 reference-world films (scored,
-development and calibration) the fitted model lifted them on exactly the 8 whose world lifted
-them (each lift within 6.1 ms of the truth), and on none of the other 78. The candidate (a different
-rear spring) is what that leaves out.
+development and calibration) the fitted model lifted them on exactly the 8 whose world
+lifted them (each lift within 6.1 ms of the truth), and on none of the other 78. The
+candidate (a different rear spring) is what that leaves out.
 """
 
 from __future__ import annotations
