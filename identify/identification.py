@@ -115,7 +115,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
     ``vehicle_ref`` is what ``--vehicle`` must be given to load the vehicle again (its name,
     or the path of a file outside ``data/vehicles/``; default the name)."""
     from identify.discover.candidates import assumed_in_base
-    from identify.discover.shown import effects_shown
+    from identify.discover.shown import effects_shown, shown_status
     from sim import events_ms
 
     params = {}
@@ -141,6 +141,7 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             elif reason := _barely_narrowed(fr, key):
                 params[key].update(identified=False, reason=reason)
     model_events = {k: (v + fr.contact_time * 1e3 if v is not None else None) for k, v in events_ms(fr.trajectory).items()}
+    shown = effects_shown(fr, vehicle, [d["effect"] for d in discoveries])
     tracks = recording.tracks
     doc = {
         "vehicle": vehicle_ref or vehicle.key,
@@ -181,9 +182,9 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         },
         "priors": fr.pulls(),
         "discoveries": list(discoveries),
-        "discovery_status": discovery_status,
+        "discovery_status": discovery_status + shown_status(shown),
         # a candidate's effect the fitted base model shows by itself (the rear wheels lifted)
-        "shown_by_model": effects_shown(fr, vehicle, [d["effect"] for d in discoveries]),
+        "shown_by_model": shown,
         "events_ms": dict(fr.measurement.events_ms),
         "model_events_ms": model_events,
         "notes": list(fr.measurement.notes) + _second_body_notes(fr, recording),

@@ -54,7 +54,8 @@ def test_result_json_has_the_interface_fields(fitted_folder):
     [shown] = doc["shown_by_model"]
     assert shown["effect"] == "rear_axle_lift" and not shown["contradicted"]
     assert shown["window_ms"][0] == pytest.approx(doc["model_events_ms"]["rear_wheel_lift"], abs=1.0)
-    assert "**rear_axle_lift**, in the fitted model" in (fitted_folder / "report.md").read_text()
+    assert "**rear_axle_lift**, shown by the base model itself" in (fitted_folder / "report.md").read_text()
+    assert doc["discovery_status"].endswith("the fitted base model itself shows rear axle lift (no mechanism added: below)")
     # each fitted channel's misfit factor (at least 1) and, for those widened, its weight's
     # (a channel's samples before contact weighted apart: "x_m before contact")
     misfit, widened = doc["fit"]["misfit_by_channel"], doc["fit"]["sigma_widened_by_channel"]

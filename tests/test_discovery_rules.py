@@ -514,19 +514,31 @@ def test_three_hub_samples_in_the_window_are_enough_to_judge(a4):
 def test_a_rear_lift_the_base_model_shows_is_named_with_its_window_and_evidence(a4):
     from identify.discover.shown import effects_shown
 
-    [e] = effects_shown(lift_recording(0.05), a4)
+    from identify.discover.shown import shown_status
+    from identify.report.markdown import window_words
+
+    fr = lift_recording(0.05)
+    [e] = effects_shown(fr, a4)
     # lifted over the whole model clock (0-100 ms), contact 2 ms after the recording's zero,
     # clipped to the recording's end
-    assert e["effect"] == "rear_axle_lift" and e["window_ms"] == [2.0, 100.0]
-    assert e["evidence"].startswith("seen:") and e["contradicted"] is False
-    assert "lifts them by itself" in e["explanation"]
+    assert e["effect"] == "rear_axle_lift" and e["window_ms"] == [2.0, 100.0] and e["to_end"] is True
+    assert e["evidence"].startswith("seen:") and "(it rose 49 mm, the model lifts it 49 mm; chi2 0 lifted" in e["evidence"]
+    assert e["contradicted"] is False and "lifts them by itself" in e["explanation"]
+    assert window_words(e) == "from 2 ms to the end of the recording (100 ms)"
+    assert shown_status([e]) == "; the fitted base model itself shows rear axle lift (no mechanism added: below)"
+    fr.trajectory.rear_margin = np.where(np.arange(101) < 60, -1.0, 1.0)  # landed at 60 ms on its own clock
+    [e] = effects_shown(fr, a4)
+    assert e["window_ms"] == [2.0, 61.0] and e["to_end"] is False and window_words(e) == "2-61 ms"
 
 
 def test_a_rear_lift_the_hub_refutes_is_a_conflict_not_an_effect(a4):
     from identify.discover.shown import effects_shown
 
+    from identify.discover.shown import shown_status
+
     [e] = effects_shown(lift_recording(0.0), a4)
     assert e["contradicted"] is True and "shows the rear hub on the ground" in e["evidence"]
+    assert shown_status([e]) == ""  # a conflict, not an effect the recording shows
 
 
 def test_no_effect_is_shown_where_the_model_keeps_the_rear_down_or_discovery_named_it(a4):
@@ -548,7 +560,7 @@ def test_the_hub_is_compared_with_the_lift_on_the_models_clock(a4):
     fr.trajectory.rear_lift = 0.05 * np.clip((t - 0.03) / 0.07, 0.0, None) ** 2  # curved: a shift shows
     fr.measurement.channels["rear_wheel_height_m"] = np.interp(fr.measurement.t - 0.002, t, fr.trajectory.rear_lift)
     why, seen = rear_wheels_lifted(fr, a4, (0.0, 100.0))
-    assert why == "" and "(chi2 0 lifted against" in seen, seen
+    assert why == "" and "(it rose 47 mm, the model lifts it 47 mm; chi2 0 lifted against" in seen, seen
 
 
 def test_wheels_seen_standing_while_the_car_moves_support_blocking(a4):

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from identify.errors import UserError
-from identify.report.markdown import prior_lines
+from identify.report.markdown import prior_lines, window_words
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -95,9 +95,8 @@ def _run(args: argparse.Namespace, folder) -> int:
     for line in prior_lines(doc.get("priors") or {}):
         print(f"  {line}")
     for e in doc.get("shown_by_model") or []:
-        w = e["window_ms"]
-        print(f"  {e['effect'].replace('_', ' ')} in the fitted model, {w[0]:.0f}-{w[1]:.0f} ms"
-              + (f" (contradicted by the recording: {e['evidence']})" if e["contradicted"] else f" ({e['evidence']})"))
+        print(f"  {e['effect'].replace('_', ' ')}, shown by the base model itself (no mechanism added), {window_words(e)}"
+              + (f"; contradicted by the recording: {e['evidence']}" if e["contradicted"] else f"; {e['evidence']}"))
     for warning in doc.get("warnings") or []:
         print(f"warning: {warning}", file=sys.stderr)
     print(f"results: {ident.out}")

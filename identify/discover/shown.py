@@ -7,6 +7,8 @@ never as a discovery: no mechanism was added for it.
 
 from __future__ import annotations
 
+import numpy as np
+
 from identify.discover.candidates import CANDIDATES
 from identify.discover.loop import effect_window_ms
 
@@ -15,11 +17,14 @@ def effects_shown(fr, vehicle, discovered=()) -> list[dict]:
     """result.json's ``shown_by_model``: for each candidate the base model can show
     (``Candidate.shown_in_base``) that is not among the ``discovered`` effects and acts
     within the recording in fit ``fr``: its ``effect``, the sentence that says why the model
-    shows it, ``window_ms`` (ms after first contact, measurement clock), ``evidence`` (one
-    line: seen in a measured channel, inferred, or what contradicts it) and
-    ``contradicted`` (True when a measured channel refutes it: a conflict between the model
-    and the recording, not an effect the recording shows)."""
+    shows it, ``window_ms`` (ms after first contact, measurement clock), ``to_end`` (still
+    acting at the recording's last sample: the window's end is the recording's, not the
+    effect's), ``evidence`` (one line: seen in a measured channel, inferred, or what
+    contradicts it) and ``contradicted`` (True when a measured channel refutes it: a
+    conflict between the model and the recording, not an effect the recording shows)."""
     out = []
+    t_ms = (np.asarray(fr.trajectory.t) + fr.contact_time) * 1e3
+    inside = t_ms <= float(np.max(fr.measurement.t)) * 1e3
     for c in CANDIDATES:
         if not c.shown_in_base or c.effect in set(discovered):
             continue
@@ -28,5 +33,16 @@ def effects_shown(fr, vehicle, discovered=()) -> list[dict]:
             continue
         why, line = c.evidence(fr, vehicle, window) if c.evidence is not None else ("", "")
         out.append({"effect": c.effect, "explanation": c.shown_in_base, "window_ms": list(window),
-                    "evidence": why or line, "contradicted": bool(why)})
+                    "to_end": bool(c.acting(fr)[inside][-1]), "evidence": why or line, "contradicted": bool(why)})
     return out
+
+
+def shown_status(shown: list[dict]) -> str:
+    """What the discovery status adds for the effects the fitted model shows by itself (''
+    when none): a status that says candidates were ruled out, the rear axle's among them,
+    would otherwise read as if the rear never lifted."""
+    named = [e["effect"].replace("_", " ") for e in shown if not e["contradicted"]]
+    if not named:
+        return ""
+    return f"; the fitted base model itself shows {' and '.join(named)} (no mechanism added: below)"
+

@@ -84,6 +84,15 @@ def assumed_lines(assumed: list[dict]) -> list[str]:
     return out
 
 
+def window_words(entry: dict) -> str:
+    """The window of an effect the model shows (result.json ``shown_by_model``), in words:
+    "47-120 ms", or "from 47 ms to the end of the recording (298 ms)"."""
+    start, end = entry["window_ms"]
+    if entry.get("to_end"):
+        return f"from {start:.0f} ms to the end of the recording ({end:.0f} ms)"
+    return f"{start:.0f}-{end:.0f} ms"
+
+
 def _fmt(value, scale, digits=3):
     if value is None:
         return "-"
@@ -169,8 +178,8 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         if d.get("evidence"):
             lines.append(f"  Evidence: {d['evidence']}")
     for e in doc.get("shown_by_model") or []:
-        lines += ["", f"- **{e['effect']}**, in the fitted model without a discovery ({e['window_ms'][0]:.0f}-"
-                  f"{e['window_ms'][1]:.0f} ms): {e['explanation']}"]
+        lines += ["", f"- **{e['effect']}**, shown by the base model itself (no mechanism added), {window_words(e)}:"
+                  f" {e['explanation']}"]
         if e.get("evidence"):
             lines.append(("  Contradicted by the recording: " if e.get("contradicted") else "  Evidence: ") + e["evidence"])
     check = doc.get("force_check")

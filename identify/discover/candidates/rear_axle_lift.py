@@ -62,8 +62,9 @@ def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
     if grounded - lifted < DECISIVE_CHI2:
         return "", (f"inferred, not seen: the rear hub's height in {span} fits the model's lift and the ground alike"
                     f" (chi2 {lifted:.0f} lifted against {grounded:.0f} on the ground)")
-    return "", (SEEN + f"the rear hub rises with the model's lift in {span} (chi2 {lifted:.0f} lifted against"
-                f" {grounded:.0f} on the ground, over {int(ok.sum())} samples)")
+    return "", (SEEN + f"the rear hub rises with the model's lift in {span} (it rose {1e3 * np.ptp(height):.0f} mm, the"
+                f" model lifts it {1e3 * np.ptp(lift):.0f} mm; chi2 {lifted:.0f} lifted against {grounded:.0f} on the"
+                f" ground, over {int(ok.sum())} samples)")
 
 
 CANDIDATE = Candidate(
@@ -78,7 +79,7 @@ CANDIDATE = Candidate(
     evidence=rear_wheels_lifted,
     active=lambda fr: np.asarray(fr.trajectory.rear_margin) < 0.0,
     implausible=same_as_vehicle_file,
-    shown_in_base="The contact force acts below the centre of gravity (dz_contact), so it tips the car nose-down "
-                  "and lifts the rear wheels off the ground: the base model, with the vehicle file's rear axle, "
-                  "lifts them by itself.",
+    shown_in_base="The contact force acts below the centre of gravity (at the fitted dz_contact), so it tips the car "
+                  "nose-down and lifts the rear wheels off the ground: the base model, with the vehicle file's rear "
+                  "axle, lifts them by itself.",
 )
