@@ -243,3 +243,28 @@ def test_simulate_from_a_result_json_brings_the_fitted_model_along(fitted_folder
     assert "engine" not in runs["rigid says"] and "fitted impact speed" not in runs["rigid says"]
     # the engine lags the cabin at first: the cabin's displacement differs from the rigid car's by millimetres
     assert np.max(np.abs(runs["fitted"]["x_m"] - runs["rigid"]["x_m"])) > 1e-3
+
+
+def test_the_console_says_what_discovery_found_and_what_the_model_shows():
+    """``identify fit`` prints discovery's status and each discovery with its window and
+    parameters, so a user who reads only the console (``--quiet``) is told of them."""
+    from identify.commands.fit import summary_lines
+
+    doc = {"vehicle_name": "Audi A4", "impact_speed_kmh": 56.3, "fit": {"rms_m": 0.002},
+           "parameters": {"k_compression": {"value": 970000.0, "unit": "N/m^3", "std": 5000.0}},
+           "discovery_status": "found stiffness_zone; residuals are now white noise",
+           "discoveries": [{"effect": "stiffness_zone", "window_ms": [38.0, 66.0],
+                            "parameters": {"depth_m": {"value": 0.42, "unit": "m", "std": 0.01}}},
+                           {"effect": "unexplained", "window_ms": [123.0, 137.0],
+                            "parameters": {"time_of_peak_ms": {"value": 130.0, "unit": "ms", "std": None}}}],
+           "shown_by_model": [{"effect": "rear_axle_lift", "window_ms": [47.3, 298.3], "to_end": True,
+                               "evidence": "seen: the rear hub rises", "contradicted": False}]}
+    lines = summary_lines(doc)
+    assert lines[0] == "Audi A4, 56.30 km/h, fit RMS 2.00 mm"
+    assert lines[1] == "  k_compression   970000 +- 5e+03 N/m^3"
+    assert lines[2:] == [
+        "discovery: found stiffness_zone; residuals are now white noise",
+        "  stiffness zone, 38-66 ms: depth_m 0.42 +- 0.01 m",
+        "  unexplained, 123-137 ms: time_of_peak_ms 130 ms",
+        "  rear axle lift, shown by the base model itself (no mechanism added), from 47 ms to the end of the"
+        " recording (298 ms); seen: the rear hub rises"]

@@ -85,19 +85,37 @@ def _run(args: argparse.Namespace, folder) -> int:
         force=args.force,
     )
     doc = ident.document
-    print(f"{doc['vehicle_name']}, {doc['impact_speed_kmh']:.2f} km/h, fit RMS {1e3 * doc['fit']['rms_m']:.2f} mm")
+    for line in summary_lines(doc):
+        print(line)
+    for warning in doc.get("warnings") or []:
+        print(f"warning: {warning}", file=sys.stderr)
+    print(f"results: {ident.out}")
+    return 0
+
+
+def summary_lines(doc: dict) -> list[str]:
+    """What ``identify fit`` prints of a result.json document: the car, speed and fit RMS;
+    each parameter with its std (or why it is not identified); what was measured before the
+    fit and how far the fit pulled it; discovery's status and each discovery (its window and
+    parameters), and each effect the base model shows by itself."""
+    out = [f"{doc['vehicle_name']}, {doc['impact_speed_kmh']:.2f} km/h, fit RMS {1e3 * doc['fit']['rms_m']:.2f} mm"]
     for name, p in doc["parameters"].items():
         std = f" +- {p['std']:.3g}" if p.get("std") is not None else ""
         if p.get("std_model"):
             std += f" (data alone +- {p['std_data']:.3g})"
         flag = "" if p.get("identified", True) else f"   ({p['reason']})"
-        print(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
-    for line in prior_lines(doc.get("priors") or {}):
-        print(f"  {line}")
+        out.append(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
+    out += [f"  {line}" for line in prior_lines(doc.get("priors") or {})]
+    if doc.get("discovery_status"):
+        out.append(f"discovery: {doc['discovery_status']}")
+    for d in doc.get("discoveries") or []:
+        values = ", ".join(f"{k} {v['value']:.4g}" + (f" +- {v['std']:.2g}" if v.get("std") else "") + f" {v['unit']}"
+                           for k, v in (d.get("parameters") or {}).items() if isinstance(v, dict) and "value" in v)
+        w = d.get("window_ms")
+        out.append(f"  {d['effect'].replace('_', ' ')}" + (f", {w[0]:.0f}-{w[1]:.0f} ms" if w else "")
+                   + (f": {values}" if values else ""))
     for e in doc.get("shown_by_model") or []:
-        print(f"  {e['effect'].replace('_', ' ')}, shown by the base model itself (no mechanism added), {window_words(e)}"
-              + (f"; contradicted by the recording: {e['evidence']}" if e["contradicted"] else f"; {e['evidence']}"))
-    for warning in doc.get("warnings") or []:
-        print(f"warning: {warning}", file=sys.stderr)
-    print(f"results: {ident.out}")
-    return 0
+        out.append(f"  {e['effect'].replace('_', ' ')}, shown by the base model itself (no mechanism added), "
+                   f"{window_words(e)}" + (f"; contradicted by the recording: {e['evidence']}" if e["contradicted"]
+                                           else f"; {e['evidence']}"))
+    return out
