@@ -262,7 +262,7 @@ def candidate_fit(values, std, crush_max=0.6, engine_force_max=0.0, priors=None,
     traj = types.SimpleNamespace(t=np.linspace(0.0, 0.2, 50), crush=np.linspace(0.0, crush_max, 50),
                                  engine_force=np.full(50, engine_force_max), engine_x=np.linspace(0.0, 0.4, 50),
                                  mounts_broken=acts * 1.0, front_blocked=acts * 1.0,
-                                 rear_margin=np.where(acts, -1.0, 1.0), rear_lift=np.where(acts, 0.05, 0.0))
+                                 rear_margin=np.where(acts, -1.0, 1.0))
     params = types.SimpleNamespace(k_compression=k_compression)
     return FakeFit(m, {}, tuple(values), dict(values), dict(std), dict(priors or {}), {}, traj, params)
 
@@ -455,7 +455,8 @@ def lift_recording(measured_rise_m, model_lift_m=0.05, with_height=True, sigma=0
     if with_height:
         ch["rear_wheel_height_m"], sg["rear_wheel_height_m"] = measured_rise_m * t / 0.1, np.full(n, sigma)
     m = Measurement(t=t, channels=ch, sigma=sg)
-    traj = types.SimpleNamespace(t=t, rear_lift=model_lift_m * t / 0.1, rear_margin=-np.ones(n),
+    # the body rises evenly without pitching: the wheel off the floor from the start rises with it
+    traj = types.SimpleNamespace(t=t, z=model_lift_m * t / 0.1, pitch=np.zeros(n), rear_margin=-np.ones(n),
                                  crush=np.linspace(0.0, 0.6, n), engine_force=np.zeros(n))
     name = "rear_axle_lift.rear_axle_stiffness"
     return FakeFit(m, {"x_m": ch["x_m"]}, (name,), {name: 400e3}, {name: 10e3}, {}, {}, traj,
@@ -469,6 +470,22 @@ def test_a_candidate_whose_model_never_shows_it_is_not_that_finding(a4, effect):
     fr = candidate_fit(*PLAUSIBLE[effect], engine_force_max=1e5)
     fr.trajectory.rear_margin, fr.trajectory.front_blocked = np.ones(50), np.zeros(50)
     assert "never shows it" in _plausible(effect, fr, a4)
+
+
+def test_the_wheel_centre_leaves_the_floor_with_the_margin_and_rises_with_the_axle_point(a4):
+    """Off the floor from 30 to 79 ms (the contact margin negative): the wheel centre rises
+    as the rear axle point does from where it was at 30 ms, the car pitching nose-down (which
+    lifts the rear axle point by b sin(pitch)); on the floor it stays at 0."""
+    from identify.discover.candidates.rear_axle_lift import wheel_centre_rise
+
+    t = np.linspace(0.0, 0.1, 101)
+    pitch, off = 0.2 * t / 0.1, (t >= 0.0295) & (t < 0.0795)
+    fr = types.SimpleNamespace(trajectory=types.SimpleNamespace(t=t, z=np.zeros(101), pitch=pitch,
+                                                                rear_margin=np.where(off, -1.0, 1.0)))
+    axle = a4.cg_to_rear_axle * np.sin(pitch) + (a4.wheel_radius - a4.cg_height) * (np.cos(pitch) - 1.0)
+    rise = wheel_centre_rise(fr, a4)
+    assert np.all(rise[~off] == 0.0) and rise[off].max() > 0.1
+    np.testing.assert_allclose(rise[off], axle[off] - axle[30], atol=1e-12)
 
 
 def test_a_rear_hub_seen_rising_with_the_model_supports_rear_lift(a4):
@@ -557,8 +574,8 @@ def test_the_hub_is_compared_with_the_lift_on_the_models_clock(a4):
 
     fr = lift_recording(0.0)
     t = np.asarray(fr.trajectory.t)
-    fr.trajectory.rear_lift = 0.05 * np.clip((t - 0.03) / 0.07, 0.0, None) ** 2  # curved: a shift shows
-    fr.measurement.channels["rear_wheel_height_m"] = np.interp(fr.measurement.t - 0.002, t, fr.trajectory.rear_lift)
+    fr.trajectory.z = 0.05 * np.clip((t - 0.03) / 0.07, 0.0, None) ** 2  # curved: a shift shows
+    fr.measurement.channels["rear_wheel_height_m"] = np.interp(fr.measurement.t - 0.002, t, fr.trajectory.z)
     why, seen = rear_wheels_lifted(fr, a4, (0.0, 100.0))
     assert why == "" and "(it rose 47 mm, the model lifts it 47 mm; chi2 0 lifted against" in seen, seen
 
