@@ -64,10 +64,10 @@ def wheel_centre_rise(fr, vehicle) -> np.ndarray:
 def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
     """The measured rear hub height in the window set against the fitted model's rear wheel
     centre (:func:`wheel_centre_rise`) and against staying on the ground (each about its own
-    constant, fitted): the lift is
-    refuted when the ground fits better by more than ``DECISIVE_CHI2``, and seen only where the
-    lift fits better by that much; where the two cannot be told apart by that much, or no hub
-    is tracked, the lift is inferred from the body's motion, not seen."""
+    constant, fitted): the lift is refuted when the ground fits better by more than
+    ``DECISIVE_CHI2``, and seen only where the lift fits better by that much; where the two
+    cannot be told apart by that much, or no hub is tracked, the lift is inferred from the
+    body's motion, not seen."""
     m = fr.measurement
     ok, span = samples_in_window(fr, REAR_HEIGHT, window_ms)
     if ok.sum() < 3:
