@@ -45,4 +45,3 @@ def shown_status(shown: list[dict]) -> str:
     if not named:
         return ""
     return f"; the fitted base model itself shows {' and '.join(named)} (no mechanism added: below)"
-
