@@ -24,6 +24,7 @@ slides with the slip coefficient, rising to the adhesive one as it comes to rest
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from sim.smooth import smooth_relu, smooth_sign
@@ -79,3 +80,18 @@ def ground_forces(q, v, vehicle, params, front_blocked, solver):
         ]
     )
     return force, normal, margin, lift
+
+
+def wheel_centre_rise(axle_z, margin):
+    """m, per sample: how far a wheel's centre stands above the floor, from its axle point's
+    height ``axle_z`` (m, any fixed origin) and the axle's contact margin ``margin`` (N),
+    both (n,). 0 while the margin is >= 0 (the tyre on the floor); where it is negative the
+    wheel has left the floor and rises with the axle point from the height that point had
+    at the last sample on the floor (the first sample, for a wheel off the floor from the
+    start), never below the floor. How a film's hub target moves: what the renderer of our
+    own films draws (``identify.recordings.synthetic``) and what a lifted rear hub is set
+    against (``identify.discover.candidates.rear_axle_lift``)."""
+    axle_z, margin = jnp.asarray(axle_z), jnp.asarray(margin)
+    grounded = margin >= 0.0
+    last = jax.lax.cummax(jnp.where(grounded, jnp.arange(axle_z.shape[0]), 0))
+    return jnp.where(grounded, 0.0, jnp.maximum(axle_z - axle_z[last], 0.0))

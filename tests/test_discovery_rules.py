@@ -474,18 +474,19 @@ def test_a_candidate_whose_model_never_shows_it_is_not_that_finding(a4, effect):
 
 def test_the_wheel_centre_leaves_the_floor_with_the_margin_and_rises_with_the_axle_point(a4):
     """Off the floor from 30 to 79 ms (the contact margin negative): the wheel centre rises
-    as the rear axle point does from where it was at 30 ms, the car pitching nose-down (which
-    lifts the rear axle point by b sin(pitch)); on the floor it stays at 0."""
-    from identify.discover.candidates.rear_axle_lift import wheel_centre_rise
+    as the rear axle point does from where it was at 29 ms, its last sample on the floor, the
+    car pitching nose-down (which lifts the rear axle point by b sin(pitch)); on the floor it
+    stays at 0."""
+    from identify.discover.candidates.rear_axle_lift import rear_wheel_centre_rise
 
     t = np.linspace(0.0, 0.1, 101)
     pitch, off = 0.2 * t / 0.1, (t >= 0.0295) & (t < 0.0795)
     fr = types.SimpleNamespace(trajectory=types.SimpleNamespace(t=t, z=np.zeros(101), pitch=pitch,
                                                                 rear_margin=np.where(off, -1.0, 1.0)))
     axle = a4.cg_to_rear_axle * np.sin(pitch) + (a4.wheel_radius - a4.cg_height) * (np.cos(pitch) - 1.0)
-    rise = wheel_centre_rise(fr, a4)
+    rise = rear_wheel_centre_rise(fr, a4)
     assert np.all(rise[~off] == 0.0) and rise[off].max() > 0.1
-    np.testing.assert_allclose(rise[off], axle[off] - axle[30], atol=1e-12)
+    np.testing.assert_allclose(rise[off], axle[off] - axle[29], atol=1e-12)
 
 
 def test_a_rear_hub_seen_rising_with_the_model_supports_rear_lift(a4):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from sim import Solver, named_params
-from sim.ground import ground_forces
+from sim.ground import ground_forces, wheel_centre_rise
 from sim.vehicle import GRAVITY
 from sim.wheels import axle_jacobians
 
@@ -123,3 +123,16 @@ def test_axle_geometry_and_the_virtual_work_of_the_one_axle_on_the_ground(a4, li
     assert tyre < 0.0  # moving forward: the tyre pushes back
     assert force[2] == pytest.approx(normal[on] * dz_axle + tyre * dx_ground, rel=1e-6)
     assert force[1] == pytest.approx(normal[on] - float(a4.mass) * GRAVITY, rel=1e-9)
+
+
+def test_a_wheel_centre_rises_with_its_axle_point_from_its_last_sample_on_the_floor():
+    """On the floor (margin >= 0) the centre stands at 0; off it, it rises as the axle point
+    does from where that point was at the last sample on the floor, never below the floor;
+    landing and leaving again starts from the new last sample on the floor, and a wheel off
+    the floor from the start rises from its first sample."""
+    axle = np.array([0.0, 0.01, 0.03, 0.06, 0.02, -0.01, 0.05, 0.04, 0.08, 0.09])
+    margin = np.array([1.0, 1.0, -1.0, -1.0, -1.0, -1.0, 1.0, -1.0, -1.0, 0.0])
+    np.testing.assert_allclose(np.asarray(wheel_centre_rise(axle, margin)),
+                               [0.0, 0.0, 0.02, 0.05, 0.01, 0.0, 0.0, 0.0, 0.03, 0.0], atol=1e-15)
+    np.testing.assert_allclose(np.asarray(wheel_centre_rise(axle[2:5], -np.ones(3))), [0.0, 0.03, 0.0],
+                               atol=1e-15)

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from identify.errors import UserError
-from identify.report.markdown import prior_lines, window_words
+from identify.report.markdown import discovery_values, prior_lines, window_words
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -109,8 +109,7 @@ def summary_lines(doc: dict) -> list[str]:
     if doc.get("discovery_status"):
         out.append(f"discovery: {doc['discovery_status']}")
     for d in doc.get("discoveries") or []:
-        values = ", ".join(f"{k} {v['value']:.4g}" + (f" +- {v['std']:.2g}" if v.get("std") else "") + f" {v['unit']}"
-                           for k, v in (d.get("parameters") or {}).items() if isinstance(v, dict) and "value" in v)
+        values = discovery_values(d)
         w = d.get("window_ms")
         out.append(f"  {d['effect'].replace('_', ' ')}" + (f", {w[0]:.0f}-{w[1]:.0f} ms" if w else "")
                    + (f": {values}" if values else ""))

@@ -21,6 +21,7 @@ import numpy as np
 
 from identify.errors import UserError
 from sim._paths import VEHICLE_DIR
+from sim.ground import wheel_centre_rise
 from video.types import CarGeometry
 
 _GEOMETRY_KEYS = ("length", "height", "wheelbase", "front_overhang", "wheel_radius", "cg_height", "cg_to_front_axle",
@@ -157,12 +158,9 @@ def analytic_trajectory(speed: float = 15.64, duration: float = 0.3, fps: float 
 
 
 def wheel_offsets(axle_z: np.ndarray, margin: np.ndarray, wheel_radius: float) -> np.ndarray:
-    """Vertical offset of a wheel centre from its body axle point, frame by frame.
-
-    While the model's contact margin is >= 0 the wheel stands on the floor (centre at
-    ``wheel_radius``); when it turns negative the wheel leaves the ground and from then
-    on moves with the axle point (the offset of the lift-off frame is kept) until it is
-    back on the floor.
+    """Vertical offset of a wheel centre from its body axle point, frame by frame: on the
+    floor (centre at ``wheel_radius``) while the model's contact margin is >= 0, else
+    raised with the axle point (``sim.ground.wheel_centre_rise``).
 
     Parameters
     ----------
@@ -179,18 +177,8 @@ def wheel_offsets(axle_z: np.ndarray, margin: np.ndarray, wheel_radius: float) -
     (n,) float
         Offset to add to the axle point's Z, m.
     """
-    dz = np.empty_like(axle_z)
-    frozen = None
-    for i, (za, mg) in enumerate(zip(axle_z, margin)):
-        on_floor = wheel_radius - za
-        if mg >= 0.0:
-            frozen = None
-            dz[i] = on_floor
-            continue
-        if frozen is None:
-            frozen = dz[i - 1] if i > 0 else on_floor
-        dz[i] = max(frozen, on_floor)  # never below the floor
-    return dz
+    axle_z = np.asarray(axle_z, dtype=float)
+    return wheel_radius + np.asarray(wheel_centre_rise(axle_z, margin)) - axle_z
 
 
 def render_crash(vehicle, trajectory, out_path: str | Path, *, frames_before: int = 30,

@@ -93,6 +93,13 @@ def window_words(entry: dict) -> str:
     return f"{start:.0f}-{end:.0f} ms"
 
 
+def discovery_values(d: dict) -> str:
+    """A discovery's fitted parameters in one line, as the report and the console give them:
+    "name value +- std unit, ..." (no "+-" where a parameter has no std)."""
+    return ", ".join(f"{k} {_fmt(v['value'], 1.0, 4)}" + (f" +- {_fmt(v['std'], 1.0, 2)}" if v.get("std") is not None else "")
+                     + f" {v['unit']}" for k, v in (d.get("parameters") or {}).items() if isinstance(v, dict) and "value" in v)
+
+
 def _fmt(value, scale, digits=3):
     if value is None:
         return "-"
@@ -168,8 +175,7 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
     lines += ["", "## Missing physics", ""]
     lines.append(doc.get("discovery_status", "nothing discovered"))
     for d in doc.get("discoveries") or []:
-        fitted = ", ".join(f"{k} {_fmt(v['value'], 1.0, 4)} +- {_fmt(v['std'], 1.0, 2)} {v['unit']}"
-                           for k, v in d.get("parameters", {}).items() if isinstance(v, dict) and "value" in v)
+        fitted = discovery_values(d)
         lines += ["", f"- **{d['effect']}** ({d['window_ms'][0]:.0f}-{d['window_ms'][1]:.0f} ms"
                   + (f", {d['phase']}" if d.get("phase") else "") + f"): {d['explanation']}"]
         if fitted:

@@ -21,6 +21,7 @@ import numpy as np
 
 from identify.discover.candidates.base import DECISIVE_CHI2, SEEN, Candidate, parameter, samples_in_window, signal_chi2s
 from identify.fitting.model import vehicle_value
+from sim.ground import wheel_centre_rise
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
 REAR_HEIGHT = "rear_wheel_height_m"
@@ -37,33 +38,23 @@ def same_as_vehicle_file(fr, vehicle) -> str:
     return ""
 
 
-def wheel_centre_rise(fr, vehicle) -> np.ndarray:
+def rear_wheel_centre_rise(fr, vehicle) -> np.ndarray:
     """m, per sample of ``fr.trajectory``: how far the model's rear wheel centre stands above
-    the floor. 0 while the rear axle's contact margin is >= 0 (the tyre on the floor); once
-    it turns negative the wheel leaves the floor and rises with the body's axle point, from
-    the height that point had then, as a film's hub target shows it. (The model's
-    ``rear_lift``, the axle point's rise above its static deflection, stays 0 while the
-    damper, not the spring, lets go: set against it, the bundled sample's hub, the model's own
-    film, rose 472 mm where it rose 412 mm, chi-square 2.7 million over 261 samples; 121
-    against this.)"""
+    the floor (``sim.ground.wheel_centre_rise`` of the rear axle point, as a film's hub
+    target shows it). (The model's ``rear_lift``, the axle point's rise above its static
+    deflection, stays 0 while the damper, not the spring, lets go: set against it, the
+    bundled sample's hub, the model's own film, rose 472 mm where it rose 412 mm,
+    chi-square 2.7 million over 261 samples; 121 against this.)"""
     tr = fr.trajectory
     pitch = np.asarray(tr.pitch)
     px, pz = -float(vehicle.cg_to_rear_axle), float(vehicle.wheel_radius - vehicle.cg_height)
     axle = np.asarray(tr.z) - px * np.sin(pitch) + pz * (np.cos(pitch) - 1.0)  # as sim.ground's rise
-    off = np.asarray(tr.rear_margin) < 0.0
-    out, left_at = np.zeros_like(axle), None
-    for i in range(len(axle)):
-        if off[i]:
-            left_at = axle[i] if left_at is None else left_at
-            out[i] = axle[i] - left_at
-        else:
-            left_at = None
-    return out
+    return np.asarray(wheel_centre_rise(axle, np.asarray(tr.rear_margin)))
 
 
 def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
     """The measured rear hub height in the window set against the fitted model's rear wheel
-    centre (:func:`wheel_centre_rise`) and against staying on the ground (each about its own
+    centre (:func:`rear_wheel_centre_rise`) and against staying on the ground (each about its own
     constant, fitted): the lift is refuted when the ground fits better by more than
     ``DECISIVE_CHI2``, and seen only where the lift fits better by that much; where the two
     cannot be told apart by that much, or no hub is tracked, the lift is inferred from the
@@ -74,7 +65,7 @@ def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
         return "", f"inferred, not seen: the recording does not show the rear hub's height in {span}"
     sigma = np.asarray(m.sigma[REAR_HEIGHT])[ok]
     model_t = np.asarray(m.t)[ok] - fr.contact_time
-    lift = np.interp(model_t, np.asarray(fr.trajectory.t), wheel_centre_rise(fr, vehicle))  # m
+    lift = np.interp(model_t, np.asarray(fr.trajectory.t), rear_wheel_centre_rise(fr, vehicle))  # m
     height = np.asarray(m.channels[REAR_HEIGHT])[ok]
     separable, grounded, lifted = signal_chi2s(height, lift, sigma)
     if separable < DECISIVE_CHI2:
