@@ -31,6 +31,7 @@ of each parameter, refusals (a film the tool could not read, with its one-line r
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import multiprocessing as mp
@@ -64,15 +65,15 @@ def world_plan(n: int, effect: str | None = None, base: int = SEED_BASE) -> list
 ENGINE = {"engine_impact.engine_mass": "engine_mass", "engine_impact.gap": "engine_gap"}
 
 
-def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction: bool = False) -> dict:
-    """Make one world, fit it, score it; never raises (a failure is a row). ``face_friction``:
-    as ``identify fit --face-friction``."""
+def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction: bool = True) -> dict:
+    """Make one world, fit it, score it; never raises (a failure is a row). ``face_friction``
+    False: as ``identify fit --no-face-friction``."""
     import jax
 
     jax.config.update("jax_enable_x64", True)
     import identify
     from identify.cli import _bad_input_types as bad_input_types
-    from identify.fitting.collision_fit import FitOptions
+    from identify.identification import FIT_OPTIONS
     from synth.scoring import judge_discoveries, tracking_errors
     from synth.world import make_world, write_world
 
@@ -95,7 +96,7 @@ def run_world(seed: int, effect: str, fmt: str, keep: Path | None, face_friction
         try:
             ident = identify.fit(folder / truth["recording"], folder / "vehicle.toml", fps=fps,
                                  tape_segment=truth.get("tape_segment") or 0.1, write=False, discover=True,
-                                 options=FitOptions(face_friction=face_friction))
+                                 options=dataclasses.replace(FIT_OPTIONS, face_friction=face_friction))
         except bad_input_types() as err:  # what the command line answers with one line and exit 2
             row.update(status="refused", error=str(err), t_fit_s=time.perf_counter() - t1)
             return row
@@ -369,7 +370,9 @@ def main(argv=None) -> int:
                     help=f"the development worlds (seeds from {DEVELOPMENT_SEED_BASE}), to try a rule on before scoring it")
     ap.add_argument("--json", type=Path, default=None, help="write every row and the summary here")
     ap.add_argument("--keep", type=Path, default=None, help="keep the worlds' folders here")
-    ap.add_argument("--face-friction", action="store_true", help="fit as 'identify fit --face-friction'")
+    ap.add_argument("--face-friction", action=argparse.BooleanOptionalAction, default=True,
+                    help="fit the barrier face's friction, as 'identify fit' does (default); --no-face-friction as"
+                         " 'identify fit --no-face-friction'")
     ap.add_argument("--table", type=Path, default=None, help="only print the table and summary of a --json file")
     ap.add_argument("--only", default=None,
                     help="only these seeds of the plan, comma-separated (to re-measure some worlds after a change)")

@@ -87,9 +87,10 @@ def test_results_folder_holds_tracks_plots_and_report(fitted_folder):
     report = (fitted_folder / "report.md").read_text()
     k_fit = json.loads((fitted_folder / "result.json").read_text())["parameters"]["k_compression"]["value"]
     assert "V-SIM default" in report and "| 730 kN/m^3 |" in report and f"| {k_fit / 1e3:.4g} kN/m^3 |" in report
-    # the barrier face's friction has its row, held at V-SIM's 0 and saying why
+    # the barrier face's friction has its row: fitted (identify fit's default), against V-SIM's 0
+    mu = json.loads((fitted_folder / "result.json").read_text())["parameters"]["mu_face"]
     face = next(line for line in report.splitlines() if line.startswith("| friction of the crushed front"))
-    assert "| 0 | 0 |" in face and "--face-friction" in face
+    assert mu["std"] > 0 and face.startswith(f"| friction of the crushed front on the barrier face | 0 | {mu['value']:.4g} |")
     assert not list(fitted_folder.parent.glob(".crash.identify.*")), "no temporary folder left behind"
 
 

@@ -52,9 +52,10 @@ def test_sample_film_gives_the_parameters_it_was_made_with(sample_results):
     # and the film agrees with the vehicle file: no warning
     assert doc["fit"]["starts"] == 5 and " of 5 starting points reached the best fit" in (sample_results / "report.md").read_text()
     assert "warnings" not in doc
-    # V-SIM's model: no friction on the barrier face, said in the parameters --params rebuilds it from
+    # the barrier face's friction is fitted (identify fit's default); the sample, drawn by our model
+    # without it, slides its nose down the face and the fit finds none (a wiring check, not accuracy)
     face = doc["parameters"]["mu_face"]
-    assert face["value"] == 0.0 and not face["identified"] and "--face-friction" in face["reason"]
+    assert 0.0 <= face["value"] < 0.01 and face["std"] > 0
 
 
 @pytest.mark.slow

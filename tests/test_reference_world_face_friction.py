@@ -96,12 +96,13 @@ def test_a_nose_that_slides_freely_pulls_the_friction_to_zero(world_motion):
     assert _barely_narrowed(fr, "mu_face") == "" and "mu_face" not in fr.at_bound  # a finding: none
 
 
-def test_the_face_friction_is_fitted_only_when_asked_for(world_motion):
-    from identify.identification import free_parameters
+def test_the_face_friction_is_fitted_unless_switched_off(world_motion):
+    from identify.identification import FIT_OPTIONS, free_parameters
 
     m, _, _ = world_motion
-    plain, held = free_parameters(m, None)
-    assert "mu_face" not in {p.name for p in plain} and "--face-friction" in held["mu_face"]
+    assert FIT_OPTIONS.face_friction  # what 'identify fit' and identify.fit fit with
+    plain, held = free_parameters(m, None, face_friction=False)
+    assert "mu_face" not in {p.name for p in plain} and "--no-face-friction" in held["mu_face"]
     asked, held = free_parameters(m, None, face_friction=True)
     assert "mu_face" in {p.name for p in asked} and "mu_face" not in held
     # a recording without pitch or heave cannot show it, asked for or not

@@ -27,9 +27,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--speed", type=float, default=None, help="impact speed in km/h if known (else measured)")
     p.add_argument("--out", type=Path, default=None, help="results folder (default: <video stem>.identify/ beside it)")
     p.add_argument("--no-discover", action="store_true", help="fit the base model only")
-    p.add_argument("--face-friction", action="store_true",
-                   help="fit the friction of the crushed front on the barrier face as well (README: measured"
-                        " gains and what discovery then does)")
+    p.add_argument("--face-friction", action=argparse.BooleanOptionalAction, default=True,
+                   help="fit the friction of the crushed front on the barrier face (default); --no-face-friction"
+                        " holds it at V-SIM's 0")
     p.add_argument("--starts", type=int, default=5, help="starting points of the fit (default 5)")
     p.add_argument("--force", action="store_true",
                    help="fit even when the film contradicts the vehicle file (wheelbase, length); the result "
@@ -64,7 +64,7 @@ def _run(args: argparse.Namespace, folder) -> int:
     import dataclasses
 
     import identify
-    from identify.fitting.collision_fit import FitOptions
+    from identify.identification import FIT_OPTIONS
 
     t0 = time.perf_counter()
 
@@ -80,7 +80,7 @@ def _run(args: argparse.Namespace, folder) -> int:
         speed_kmh=args.speed,
         out=folder,
         discover=not args.no_discover,
-        options=dataclasses.replace(FitOptions(), starts=args.starts, face_friction=args.face_friction),
+        options=dataclasses.replace(FIT_OPTIONS, starts=args.starts, face_friction=args.face_friction),
         progress=progress,
         force=args.force,
     )

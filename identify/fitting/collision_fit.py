@@ -108,9 +108,9 @@ class FitOptions:
         sigmas, and the covariance widened as a whole by max(1, chi2/dof) (discovery's
         candidate fits, whose rules were set against that: ``identify.discover.loop``).
     face_friction : the default free set (``base_parameters``) fits the barrier face's friction
-        (``mu_face``); off, it is V-SIM's 0. Off by default: with it, discovery's rules (set on
-        the frictionless model, whose heave misfit hid the rest) named physics on 15 of 19 clean
-        calibration films (README, "How the fit works").
+        (``mu_face``); off, it is V-SIM's 0, as a fit of V-SIM's own model is here by default.
+        ``identify fit`` fits it (``identify.identification.FIT_OPTIONS``; README, "How the fit
+        works").
     hold_measured_contact : a first contact the recording measured apart from the fitted
         channels (seen in the film, the load cells' onset) is held, not fitted: a measured
         fact, not a knob (:func:`fit`), where the model-error table has measured how far the
