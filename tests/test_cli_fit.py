@@ -269,3 +269,26 @@ def test_the_console_says_what_discovery_found_and_what_the_model_shows():
         "  unexplained, 123-137 ms: time_of_peak_ms 130 ms",
         "  rear axle lift, shown by the base model itself (no mechanism added), from 47 ms to the end of the"
         " recording (298 ms); seen: the rear hub rises"]
+
+
+def test_identify_fit_fits_the_face_friction_unless_told_not_to(monkeypatch):
+    """``identify fit`` fits the barrier face's friction (``identification.FIT_OPTIONS``);
+    ``--no-face-friction`` holds it at V-SIM's 0. What reaches the fit is read, not run."""
+    import identify
+    from identify.cli import build_parser
+    from identify.commands import fit as fit_command
+
+    class Reached(Exception):
+        pass
+
+    asked = []
+
+    def fake_fit(*args, options, **kwargs):
+        asked.append((options.face_friction, options.starts))
+        raise Reached
+
+    monkeypatch.setattr(identify, "fit", fake_fit)
+    for extra in ([], ["--no-face-friction"], ["--face-friction", "--starts", "3"]):
+        with pytest.raises(Reached):
+            fit_command._run(build_parser().parse_args(["fit", "crash.mp4", "--vehicle", "audi_a4", "--quiet", *extra]), None)
+    assert asked == [(True, 5), (False, 5), (True, 3)]
