@@ -131,6 +131,8 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
         entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name), "identified": ok}
         if not ok:
             entry["reason"] = reason
+        elif note := at_physical_floor(name, fr.values[name]):
+            entry["note"] = note
         params[name] = entry
     for key in fr.names:  # a discovered mechanism's parameters: "stiffness_zone.depth"
         if "." in key:
@@ -201,6 +203,21 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
 # a parameter with a prior counts as identified when the fit's std is below this share of the
 # prior's: the recording, not the prior, decides its value
 PRIOR_NARROWING = 0.5
+
+
+def at_physical_floor(name: str, value: float) -> str:
+    """A note for a base parameter whose floor is a law of physics (``FreeParameter.floor_is_physical``:
+    the face's friction) fitted at that floor (within ``FreeParameter.AT_BOUND`` of its range),
+    else '': the recording asks for none of it, and its std, taken at the floor, says only
+    how little above it the value may be (the bundled sample's nose slides on the face: 1e-9
+    +- 4e-5)."""
+    from identify.fitting.model import base_parameters
+
+    p = next((p for p in base_parameters(face_friction=True) if p.name == name and p.floor_is_physical), None)
+    if p is None or value - p.lower > p.AT_BOUND * (p.upper - p.lower):
+        return ""
+    return (f"at its physical floor, {p.lower:g}: the recording asks for none; its std, at the floor, says only how"
+            f" little above {p.lower:g} it may be")
 
 
 def _barely_narrowed(fr: FitResult, name: str) -> str:

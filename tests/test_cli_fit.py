@@ -210,6 +210,21 @@ def test_rerun_into_its_results_folder_keeps_the_users_files(fitted_folder):
     assert not [p for p in fitted_folder.parent.iterdir() if p.name.startswith(".")]
 
 
+def test_a_note_on_an_identified_parameter_is_on_the_console_and_in_the_report():
+    from identify.commands.fit import summary_lines
+    from identify.report.markdown import render_report
+
+    note = "at its physical floor, 0: the recording asks for none"
+    doc = {"vehicle_name": "car", "recording": "crash.mp4", "recording_kind": "film", "impact_speed_kmh": 56.0,
+           "fit": {"model": "base", "rms_m": 1e-4, "reduced_chi2": 1.0, "starts": 5, "starts_at_best": 5,
+                   "rms_by_channel": {"x_m": 1e-4}},
+           "parameters": {"mu_face": {"value": 1e-9, "unit": "1", "std": 4e-5, "std_data": 4e-5, "identified": True,
+                                      "note": note}}}
+    assert summary_lines(doc)[1] == f"  mu_face         1e-09 +- 4e-05 1   ({note})"
+    face = [line for line in render_report(doc, {"mu_face": 0.0}, []).splitlines() if "barrier face" in line]
+    assert face == [f"| friction of the crushed front on the barrier face | 0 | 1e-09 | 4e-05 | 4e-05 | {note} |"]
+
+
 def test_the_report_gives_a_fitted_face_friction_its_value_and_std():
     from identify.report.markdown import render_report
 

@@ -55,7 +55,7 @@ def test_sample_film_gives_the_parameters_it_was_made_with(sample_results):
     # the barrier face's friction is fitted (identify fit's default); the sample, drawn by our model
     # without it, slides its nose down the face and the fit finds none (a wiring check, not accuracy)
     face = doc["parameters"]["mu_face"]
-    assert 0.0 <= face["value"] < 0.01 and face["std"] > 0
+    assert 0.0 <= face["value"] < 0.01 and face["std"] > 0 and face["note"].startswith("at its physical floor")
 
 
 @pytest.mark.slow

@@ -109,3 +109,14 @@ def test_the_face_friction_is_fitted_unless_switched_off(world_motion):
     x_only = dataclasses.replace(m, channels={"x_m": m.channels["x_m"]}, sigma={"x_m": m.sigma["x_m"]})
     free, held = free_parameters(x_only, None, face_friction=True)
     assert "mu_face" not in {p.name for p in free} and "pitch or height" in held["mu_face"]
+
+
+def test_a_friction_fitted_at_its_physical_floor_says_so():
+    """The face's friction fitted at 0 (within 1 % of its range) is a finding, none, said as
+    such: its std at the floor is one-sided. Above the floor, and for a parameter whose lower
+    bound is only a range, nothing is said."""
+    from identify.identification import at_physical_floor
+
+    assert at_physical_floor("mu_face", 1e-9).startswith("at its physical floor, 0: the recording asks for none")
+    assert at_physical_floor("mu_face", 0.02) == "" and at_physical_floor("mu_face", 0.3) == ""
+    assert at_physical_floor("dz_contact", -0.3) == "" and at_physical_floor("k_compression", 1e-3) == ""

@@ -103,7 +103,7 @@ def summary_lines(doc: dict) -> list[str]:
         std = f" +- {p['std']:.3g}" if p.get("std") is not None else ""
         if p.get("std_model"):
             std += f" (data alone +- {p['std_data']:.3g})"
-        flag = "" if p.get("identified", True) else f"   ({p['reason']})"
+        flag = f"   ({p['reason']})" if not p.get("identified", True) else f"   ({p['note']})" if p.get("note") else ""
         out.append(f"  {name:15s} {p['value']:.6g}{std} {p['unit']}{flag}")
     out += [f"  {line}" for line in prior_lines(doc.get("priors") or {})]
     if doc.get("discovery_status"):

@@ -143,7 +143,7 @@ def render_report(doc: dict, defaults: dict, figures: list[str]) -> str:
         if p is None:
             continue
         u = f" {unit}" if unit else ""
-        status = "" if p.get("identified", True) else f"**{p['reason']}**"
+        status = f"**{p['reason']}**" if not p.get("identified", True) else p.get("note", "")
         lines.append(
             f"| {label} | {_fmt(defaults.get(name), scale)}{u} | {_fmt(p['value'], scale, 4)}{u} |"
             f" {_fmt(p.get('std'), scale, 2)}{u} | {_fmt(p.get('std_data'), scale, 2)}{u} | {status} |"
