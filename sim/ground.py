@@ -55,7 +55,7 @@ def ground_forces(q, v, vehicle, params, front_blocked, solver):
     px = jnp.stack([vehicle.cg_to_front_axle, -vehicle.cg_to_rear_axle])
     pz = vehicle.wheel_radius - h
 
-    rise = q[1] - px * s + pz * (c - 1.0)
+    rise = axle_rise(q[1], q[2], vehicle)
     rise_rate = z_dot - (px * c + pz * s) * pitch_rate
     k, damping = vehicle.axle_stiffness, vehicle.axle_damping
     static_deflection = vehicle.static_axle_loads / k
@@ -80,6 +80,16 @@ def ground_forces(q, v, vehicle, params, front_blocked, solver):
         ]
     )
     return force, normal, margin, lift
+
+
+def axle_rise(z, pitch, vehicle):
+    """m, (..., 2): each axle point's (front, rear) rise from its height with the car at rest
+    on its wheels, for the CG's heave ``z`` (m) and pitch ``pitch`` (rad, nose-down positive),
+    of any one shape."""
+    z, pitch = jnp.asarray(z)[..., None], jnp.asarray(pitch)[..., None]
+    px = jnp.stack([vehicle.cg_to_front_axle, -vehicle.cg_to_rear_axle])
+    pz = vehicle.wheel_radius - vehicle.cg_height
+    return z - px * jnp.sin(pitch) + pz * (jnp.cos(pitch) - 1.0)
 
 
 def wheel_centre_rise(axle_z, margin):

@@ -21,7 +21,7 @@ import numpy as np
 
 from identify.discover.candidates.base import DECISIVE_CHI2, SEEN, Candidate, parameter, samples_in_window, signal_chi2s
 from identify.fitting.model import vehicle_value
-from sim.ground import wheel_centre_rise
+from sim.ground import axle_rise, wheel_centre_rise
 
 NAME = "rear_axle_lift.rear_axle_stiffness"
 REAR_HEIGHT = "rear_wheel_height_m"
@@ -46,10 +46,7 @@ def rear_wheel_centre_rise(fr, vehicle) -> np.ndarray:
     bundled sample's hub, the model's own film, rose 472 mm where it rose 412 mm,
     chi-square 2.7 million over 261 samples; 121 against this.)"""
     tr = fr.trajectory
-    pitch = np.asarray(tr.pitch)
-    px, pz = -float(vehicle.cg_to_rear_axle), float(vehicle.wheel_radius - vehicle.cg_height)
-    axle = np.asarray(tr.z) - px * np.sin(pitch) + pz * (np.cos(pitch) - 1.0)  # as sim.ground's rise
-    return np.asarray(wheel_centre_rise(axle, np.asarray(tr.rear_margin)))
+    return np.asarray(wheel_centre_rise(axle_rise(tr.z, tr.pitch, vehicle)[:, 1], np.asarray(tr.rear_margin)))
 
 
 def rear_wheels_lifted(fr, vehicle, window_ms) -> tuple[str, str]:
