@@ -213,8 +213,8 @@ def at_physical_floor(name: str, value: float) -> str:
     +- 4e-5)."""
     from identify.fitting.model import base_parameters
 
-    p = next((p for p in base_parameters(face_friction=True) if p.name == name and p.floor_is_physical), None)
-    if p is None or value - p.lower > p.AT_BOUND * (p.upper - p.lower):
+    p = next((p for p in base_parameters(face_friction=True) if p.name == name), None)
+    if p is None or not p.at_physical_floor(value):
         return ""
     return (f"at its physical floor, {p.lower:g}: the recording asks for none; its std, at the floor, says only how"
             f" little above {p.lower:g} it may be")

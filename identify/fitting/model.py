@@ -100,6 +100,13 @@ class FreeParameter:
             return f"at its upper bound {hi:.4g} {self.unit}"
         return ""
 
+    def at_physical_floor(self, value: float) -> bool:
+        """Whether ``value`` sits at a lower bound that is a law of physics
+        (``floor_is_physical``), within ``AT_BOUND`` of the range: where :meth:`at_bound`
+        says nothing, the recording having asked for none."""
+        return (self.floor_is_physical and self.transform == "logit"
+                and float(value) - self.lower <= self.AT_BOUND * (self.upper - self.lower))
+
     def to_unconstrained(self, value: float) -> float:
         if self.transform == "log":
             return math.log(value / self.scale)
