@@ -409,6 +409,40 @@ def test_a_fit_that_pulls_a_prior_beyond_three_sigma_is_refused(a4):
     assert _plausible("engine_impact", candidate_fit(values, std, 0.6, 1e5, priors=near), a4) == ""
 
 
+def test_a_prior_the_current_model_pulls_as_far_is_not_the_candidates_trade(a4):
+    """A candidate is refused for a prior only where it pulls it further than the model it is
+    added to, by more than a sigma: on development world 960028 the base fit's face friction
+    ended at 0.99 (+4.6 sigma) and every candidate, keeping it there, was refused for it."""
+    values, std = PLAUSIBLE["stiffness_zone"]
+    prior = {"mu_face": (0.3, 0.15)}
+
+    def with_face(mu):
+        return candidate_fit({**values, "mu_face": mu}, {**std, "mu_face": 0.01}, priors=prior)
+
+    high = with_face(0.99)
+    assert "mu_face +4.6 sigma" in _plausible("stiffness_zone", high, a4)  # no model to compare with
+    assert _plausible("stiffness_zone", high, a4, current=with_face(0.99)) == ""
+    assert _plausible("stiffness_zone", high, a4, current=with_face(0.85)) == ""  # 3.7 sigma: 0.9 further
+    assert "mu_face +4.6 sigma" in _plausible("stiffness_zone", high, a4, current=with_face(0.80))  # 1.3 further
+    assert "mu_face +4.6 sigma" in _plausible("stiffness_zone", high, a4, current=with_face(0.3))
+
+
+def test_the_missing_forces_covariance_does_not_lose_a_column_whose_units_are_tiny():
+    """The force pulses' columns are metres per newton, the parameters' metres per unit: the
+    inverse of the normal matrix is taken with the columns scaled to unit length, so the
+    force's variance is that of the well-scaled problem, not cut to 0 by the pseudo-inverse
+    (which gave a 171 kN force a std of 1.4e-9 N)."""
+    from identify.discover.missing_force import normal_inverse
+
+    rng = np.random.default_rng(3)
+    well = rng.normal(size=(200, 3))
+    scale = np.array([1e-9, 1.0, 1e4])
+    cov = normal_inverse(well * scale)
+    expected = np.linalg.inv(well.T @ well) / np.outer(scale, scale)
+    assert np.allclose(cov, expected, rtol=1e-6)
+    assert cov[0, 0] > 1e15  # the tiny column's coefficient is the uncertain one
+
+
 # ---------------------------------------------------------------- held-out prediction
 
 def test_held_out_chi2_counts_only_left_out_measured_samples_divided_by_tau():
@@ -1014,7 +1048,7 @@ def test_an_alternative_that_moves_what_was_measured_before_the_fit_is_none(monk
                    "stiffness_zone.k_zone": 2e6},
                   {"k_compression": 3e4, "impact_speed": 0.016, "length_scale": 0.001, "stiffness_zone.depth": 0.01,
                    "stiffness_zone.k_zone": 1e5}, {})
-    monkeypatch.setattr(loop, "_refuted", lambda effect, fr, vehicle: False)
+    monkeypatch.setattr(loop, "_refuted", lambda effect, fr, vehicle, current=None: False)
     trials = [Trial("stiffness_zone", 0.0, -30.0, None, {}, False, "its depth is not determined")]
     assert loop.alternatives([trials], {"stiffness_zone": zone}, current, None, vehicle=None) == []
     zone.values["length_scale"] = 1.0005

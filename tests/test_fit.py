@@ -253,6 +253,33 @@ def test_a_value_within_one_percent_of_a_bound_is_at_its_bound(transform, kw, va
     assert (where.startswith(words) if words else where == ""), where
 
 
+def test_a_start_at_a_bound_is_moved_inside_where_the_fit_can_still_move_it():
+    """A fit started from an earlier one that ended at a bound must not inherit a flat
+    transform (a logit at 17: slope 4e-8); every start of the fit is moved within 1 % of the
+    range from the bound, and a start inside is kept as it is."""
+    import jax
+
+    from identify.fitting.collision_fit import FitOptions, _starting_points
+    from identify.fitting.model import FreeParameter
+
+    mu = FreeParameter("mu_face", "1", "logit", lower=0.0, upper=1.0, floor_is_physical=True)
+    dz = FreeParameter("dz_contact", "m", "tanh", scale=0.6)
+    k = FreeParameter("k_compression", "N/m^3", "log", scale=1e6)
+    starts = _starting_points((mu, dz, k), {"mu_face": 1.0 - 2e-8, "dz_contact": -0.6, "k_compression": 1e-3},
+                              FitOptions(starts=1))[0]
+    assert float(mu.to_physical(starts[0])) == pytest.approx(0.99)
+    assert float(jax.grad(mu.to_physical)(starts[0])) > 5e-3
+    assert float(dz.to_physical(starts[1])) == pytest.approx(-0.588)
+    assert float(k.to_physical(starts[2])) == pytest.approx(1e-3)  # no bound: as given
+    inside = _starting_points((mu, dz), {"mu_face": 0.3, "dz_contact": 0.1}, FitOptions(starts=1))[0]
+    assert [float(mu.to_physical(inside[0])), float(dz.to_physical(inside[1]))] == pytest.approx([0.3, 0.1])
+    # a physical floor is an answer, not a stop: a friction of 0 starts at 0
+    assert float(mu.to_physical(_starting_points((mu,), {"mu_face": 0.0}, FitOptions(starts=1))[0][0])) < 1e-8
+    floor = dataclasses.replace(mu, floor_is_physical=False)  # a range's floor is a stop
+    assert float(floor.to_physical(_starting_points((floor,), {"mu_face": 0.0}, FitOptions(starts=1))[0][0])) == \
+        pytest.approx(0.01)
+
+
 def test_a_log_scale_parameter_known_to_no_better_than_20_percent_is_not_identified():
     from identify.fitting.model import FreeParameter
 

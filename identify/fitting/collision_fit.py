@@ -654,7 +654,7 @@ def _starting_points(spec, initial: dict, options: FitOptions, held: dict | None
             if k > 0 and p.name in START_RANGES:
                 lo, hi = START_RANGES[p.name]
                 value = math.exp(rng.uniform(math.log(lo), math.log(hi))) if p.transform == "log" else rng.uniform(lo, hi)
-            u.append(p.to_unconstrained(value))
+            u.append(p.to_unconstrained(p.start_inside(value)))
         starts.append(u)
     return np.asarray(starts, dtype=float)
 

@@ -107,6 +107,26 @@ class FreeParameter:
         return (self.floor_is_physical and self.transform == "logit"
                 and float(value) - self.lower <= self.AT_BOUND * (self.upper - self.lower))
 
+    def start_inside(self, value: float) -> float:
+        """``value`` as a fit's start: a bounded value within ``AT_BOUND`` of a bound of its
+        range moved to that margin. A start taken from an earlier fit that ended at a bound
+        (a logit at 17, where the sigmoid's slope is 4e-8) would hold the parameter there in
+        every later fit, whatever they add: on development world 960028 the base fit's face
+        friction ended at 1 and every candidate's fit inherited it, each then refused for
+        pulling the friction 4.7 sigma from its prior. A physical floor (``floor_is_physical``)
+        is the recording's answer, not a stop, and a start there stays: moved up, every later
+        fit of the bundled sample (a nose that slides, friction 0) ran its logit down again
+        and stopped at the step limit (the whole command 120 s against 64)."""
+        if self.transform == "logit":
+            lo, hi = self.lower, self.upper
+        elif self.transform == "tanh":
+            lo, hi = self.centre - self.scale, self.centre + self.scale
+        else:
+            return float(value)
+        margin = self.AT_BOUND * (hi - lo)
+        floor = -math.inf if self.floor_is_physical else lo + margin
+        return float(min(max(float(value), floor), hi - margin))
+
     def to_unconstrained(self, value: float) -> float:
         if self.transform == "log":
             return math.log(value / self.scale)
