@@ -126,12 +126,12 @@ def result_document(fr: FitResult, recording: Recording, vehicle, discoveries=()
             continue
         ok, reason = fr.identified.get(name, (True, ""))
         if ok:
-            reason = _barely_narrowed(fr, name)
+            reason = _barely_narrowed(fr, name) or _model_error_unmeasured(fr, name)
             ok = not reason
         entry = {"value": fr.values[name], "unit": fr.units[name], **_std_entry(fr, name), "identified": ok}
         if not ok:
             entry["reason"] = reason
-        elif note := at_physical_floor(name, fr.values[name]):
+        if note := at_physical_floor(name, fr.values[name]):
             entry["note"] = note
         params[name] = entry
     for key in fr.names:  # a discovered mechanism's parameters: "stiffness_zone.depth"
@@ -231,6 +231,24 @@ def _barely_narrowed(fr: FitResult, name: str) -> str:
     unit = f" {fr.units[name]}" if fr.units[name] != "1" else ""
     return (f"not identified: the fit barely narrows what was known before it ({mu:.4g} +- {sigma:.2g}{unit};"
             f" fitted +- {fr.std[name]:.2g} with the model's own error)")
+
+
+def _model_error_unmeasured(fr: FitResult, name: str) -> str:
+    """'not identified: ...' for a fitted collision parameter the calibrated model-error table
+    of the recording's kind does not list (``identify.fitting.model_error``: the face's
+    friction, which no calibration world scores), '' otherwise. Its std is the data's alone,
+    and the value is this model's effective coefficient, not a measured property of the car
+    or the face: the model's front sticks where the reference world's creeps, and on
+    development world 960016 the fit gave 0.023 +- 0.004 where the world's face had 0.169."""
+    from identify.fitting.model_error import kind_of, table
+
+    if fr.measurement is None:
+        return ""
+    calibrated = table(kind_of(fr.measurement))
+    if name in calibrated.relative or name in calibrated.absolute:
+        return ""
+    return ("not identified: the model's own error for it has not been measured, so its std is the data's alone;"
+            " it is this model's effective value, which the fit needs, not a measured property of the car")
 
 
 def _nuisance_entry(fr: FitResult, name: str) -> dict:

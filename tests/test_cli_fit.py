@@ -91,6 +91,9 @@ def test_results_folder_holds_tracks_plots_and_report(fitted_folder):
     mu = json.loads((fitted_folder / "result.json").read_text())["parameters"]["mu_face"]
     face = next(line for line in report.splitlines() if line.startswith("| friction of the crushed front"))
     assert mu["std"] > 0 and face.startswith(f"| friction of the crushed front on the barrier face | 0 | {mu['value']:.4g} |")
+    # no calibration world scores it: its std is the data's alone, and it is not quoted as identified
+    assert mu["identified"] is False and "own error for it has not been measured" in mu["reason"]
+    assert "not identified" in face
     assert not list(fitted_folder.parent.glob(".crash.identify.*")), "no temporary folder left behind"
 
 
