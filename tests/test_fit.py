@@ -570,3 +570,21 @@ def test_the_calibrated_model_error_is_added_in_quadrature_and_can_decide_identi
     assert r.std_model["contact_time"] == me.absolute["contact_time"] > 0  # a film's contact: absolute, s
     ok, reason = r.identified["k_restitution"]
     assert me.relative["k_restitution"] > 0.2 and not ok and "model's own error" in reason, reason
+
+
+def test_a_fit_missing_x_beyond_any_calibration_fit_has_the_model_error_scaled_by_the_ratio(a4, paper_measurement,
+                                                                                            paper_fit):
+    """A table that says the fits it was measured on missed x by at most ``misfit_x_m``: a fit
+    missing it by more has every model error scaled by the ratio, and says so; within it,
+    the table as it is."""
+    from identify.fitting.model_error import ModelError
+
+    rms = paper_fit.rms["x_m"]
+    for limit, factor in ((rms / 3.0, 3.0), (2.0 * rms, 1.0)):
+        me = ModelError(relative={"k_compression": 0.05}, absolute={"restitution": 0.004}, source="t", misfit_x_m=limit)
+        r = fit(paper_measurement, a4, model_error=me)
+        assert r.std_model["k_compression"] == pytest.approx(0.05 * factor * r.values["k_compression"], rel=1e-6)
+        assert r.std_model["restitution"] == pytest.approx(0.004 * factor, rel=1e-6)
+        assert r.std["restitution"] == pytest.approx(np.hypot(r.std_data["restitution"], 0.004 * factor), rel=1e-9)
+        scaled = [n for n, w in r.model_error_where.items() if "scaled by 3" in w]
+        assert scaled == (["k_compression", "restitution"] if factor > 1 else [])

@@ -165,6 +165,23 @@ def test_a_regimes_error_replaces_the_clean_worlds_where_larger_and_says_where_i
         assert same.std("dz_contact", -0.2) == 0.04 and where == {}
 
 
+def test_beyond_the_largest_misfit_it_was_measured_on_a_table_scales_by_the_ratio():
+    t = ModelError(relative={"k_compression": 0.08}, absolute={"dz_contact": 0.007}, source="s", misfit_x_m=0.004)
+    assert t.beyond_measured(0.012) == pytest.approx(3.0)
+    assert t.beyond_measured(0.003) == 1.0 and t.beyond_measured(None) == 1.0 and t.beyond_measured(math.nan) == 1.0
+    assert ModelError(relative={"k_compression": 0.08}).beyond_measured(0.012) == 1.0  # a table that does not say
+    three = t.scaled(3.0)
+    assert three.std("k_compression", 1e6) == pytest.approx(2.4e5) and three.std("dz_contact", -0.1) == pytest.approx(0.021)
+    # a film calibration states the largest x misfit of the fits it used (rms_mm: the fit's x RMS)
+    base = CALIBRATION_SEED_BASE
+    rows = [dict(_row(base, k_compression=(1.05e6, 5.0, 1e-9)), format="film", rms_mm=1.2),
+            dict(_row(base + 1, k_compression=(0.95e6, -5.0, 1e-9)), format="film", rms_mm=3.8),
+            dict(_row(base + 2, effect="stiffness_zone", k_compression=(2e6, 100.0, 1e-9)), format="film", rms_mm=13.0)]
+    assert model_error_table(rows)["misfit_x_m"] == pytest.approx(0.0038)
+    assert "misfit_x_m" not in model_error_table([dict(r, format="isomme") for r in rows])
+    assert table("film").misfit_x_m > 0 and table("sensors").misfit_x_m is None
+
+
 def test_a_fit_is_in_the_rear_lifted_regime_when_its_model_lifts_the_rear_within_the_recording():
     from types import SimpleNamespace
 

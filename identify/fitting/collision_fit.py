@@ -916,6 +916,13 @@ def fit(
     # the model's own error where the fitted model runs (the rear lifted, or not) within the recording
     regimes = regimes_of(traj, recorded_after_contact(measurement, fitted_channels, float(contact_time)))
     here, model_error_where = error_table.in_regimes(regimes, values)
+    factor = error_table.beyond_measured(rms.get("x_m"))
+    if factor > 1.0:  # a misfit beyond any fit the table was measured on: its errors scaled by it
+        here = here.scaled(factor)
+        beyond = (f"scaled by {factor:.2g}: this fit misses x by {1e3 * rms['x_m']:.1f} mm RMS, beyond the"
+                  f" {1e3 * error_table.misfit_x_m:.1f} mm of any fit the model's error was measured on")
+        model_error_where = {n: "; ".join(filter(None, (model_error_where.get(n), beyond)))
+                             for n in names if here.std(n, values[n]) > 0.0}
     std, std_model = here.covering(values, std_data)
     result = FitResult(
         names=names,
