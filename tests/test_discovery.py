@@ -139,7 +139,7 @@ def test_a_candidate_that_does_not_hold_in_the_fit_as_reported_is_not_named(a4, 
     _, m, _, base = block_case
     vetted = []
 
-    def plausible(effect, fr, vehicle):
+    def plausible(effect, fr, vehicle, current=None):
         vetted.append(bool(fr.sigma_widened))
         return "front_wheel_block.depth ran off (made so here)" if fr.sigma_widened else ""
 

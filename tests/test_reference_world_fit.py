@@ -14,6 +14,8 @@ below 1000; the accuracy benchmark scores on seeds from 910,000)."""
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from identify.identification import COLLISION_PARAMETERS
@@ -78,7 +80,15 @@ def test_the_cabin_alone_fit_follows_the_cabin_and_widens_what_the_two_body_fit_
         assert abs(one.values[name] - truth["params"][name]) < Z_MAX * one.std[name], name
     assert any("does not explain the cabin's motion better" in w for w in doc["warnings"])
     shift = abs(fr.values["k_compression"] - one.values["k_compression"])
-    assert fr.model_choice["k_compression"] == pytest.approx(shift) and fr.std["k_compression"] > shift
+    # with how far the models discovery did not adopt put it (here a rate dependence, BIC -3.1,
+    # which the measured engine's mass prior, pulled by the base model itself, had refuted
+    # until 2026-11-29), in quadrature
+    from identify.discover.loop import Alternative, alternatives_shift
+
+    alts = [Alternative(a["label"], a["delta_bic"], a["values"]) for a in doc["discovery_alternatives"]]
+    moved = alternatives_shift(fr, alts).get("k_compression", 0.0)
+    assert fr.model_choice["k_compression"] == pytest.approx(math.hypot(shift, moved), rel=1e-4)
+    assert fr.std["k_compression"] > max(shift, moved)
 
 
 @pytest.mark.slow
