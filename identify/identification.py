@@ -530,8 +530,10 @@ def fit_warnings(fr) -> list[str]:
     """What the user must be told of fit ``fr`` before its numbers: every fitted quantity a
     bound stopped (not identified: the fit's range set it), and every quantity pulled beyond
     ``FitResult.PULL_CONFLICT`` sigma from what was known before the fit (a measured speed or
-    contact, a vehicle file's engine mass): the model and the recording disagree there."""
-    out = [f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the fit's range, not"
+    contact, a vehicle file's engine mass): the model and the recording disagree there; and a
+    fit that misses x beyond any fit the model's error was measured on (its errors scaled)."""
+    out = [f"every parameter's model error {fr.model_error_scaled}"] if getattr(fr, "model_error_scaled", "") else []
+    out += [f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the fit's range, not"
            " the recording, set it (the model may be trading it against what it cannot explain)"
            for name, where in fr.at_bound.items()]
     for name, p in fr.pulls().items():

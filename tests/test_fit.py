@@ -578,6 +578,7 @@ def test_a_fit_missing_x_beyond_any_calibration_fit_has_the_model_error_scaled_b
     missing it by more has every model error scaled by the ratio, and says so; within it,
     the table as it is."""
     from identify.fitting.model_error import ModelError
+    from identify.identification import fit_warnings
 
     rms = paper_fit.rms["x_m"]
     for limit, factor in ((rms / 3.0, 3.0), (2.0 * rms, 1.0)):
@@ -588,3 +589,6 @@ def test_a_fit_missing_x_beyond_any_calibration_fit_has_the_model_error_scaled_b
         assert r.std["restitution"] == pytest.approx(np.hypot(r.std_data["restitution"], 0.004 * factor), rel=1e-9)
         scaled = [n for n, w in r.model_error_where.items() if "scaled by 3" in w]
         assert scaled == (["k_compression", "restitution"] if factor > 1 else [])
+        # and the user is warned, once
+        warned = [w for w in fit_warnings(r) if w.startswith("every parameter's model error scaled by 3")]
+        assert len(warned) == (1 if factor > 1 else 0) and all("mm RMS" in w for w in warned)

@@ -197,7 +197,11 @@ class FitResult:
         measurement).
     model_error_where : name -> where its ``std_model`` was measured, for the parameters whose
         model error is a regime's (``identify.fitting.model_error.REGIMES``: the fitted model
-        lifts the rear wheels within the recording) rather than the clean worlds'.
+        lifts the rear wheels within the recording) rather than the clean worlds', or was
+        scaled beyond the misfit the table was measured on.
+    model_error_scaled : '' or why every model error was scaled
+        (``identify.fitting.model_error.ModelError.beyond_measured``): "scaled by 3.5: this
+        fit misses x by 13.5 mm RMS, beyond the 3.8 mm of any fit ...".
     std_data_by_channel : name -> the data's standard deviation (its unit) from the same
         residuals and Jacobian at the same optimum with each channel's rows widened by that
         channel's own misfit and correlation time (``least_squares.parameter_covariance``,
@@ -245,6 +249,7 @@ class FitResult:
     held_measured: dict[str, dict] = dataclasses.field(default_factory=dict)
     model_error_where: dict[str, str] = dataclasses.field(default_factory=dict)
     std_data_by_channel: dict[str, float] = dataclasses.field(default_factory=dict)
+    model_error_scaled: str = ""
 
     PULL_CONFLICT = 3.0  # |pull| beyond this: the recording contradicts what was known before
 
@@ -916,7 +921,7 @@ def fit(
     # the model's own error where the fitted model runs (the rear lifted, or not) within the recording
     regimes = regimes_of(traj, recorded_after_contact(measurement, fitted_channels, float(contact_time)))
     here, model_error_where = error_table.in_regimes(regimes, values)
-    factor = error_table.beyond_measured(rms.get("x_m"))
+    factor, beyond = error_table.beyond_measured(rms.get("x_m")), ""
     if factor > 1.0:  # a misfit beyond any fit the table was measured on: its errors scaled by it
         here = here.scaled(factor)
         beyond = (f"scaled by {factor:.2g}: this fit misses x by {1e3 * rms['x_m']:.1f} mm RMS, beyond the"
@@ -955,6 +960,7 @@ def fit(
         held_measured=held_measured,
         model_error_where={n: w for n, w in model_error_where.items() if n in names},
         std_data_by_channel={} if by_channel is None else dict(zip(names, map(float, by_channel.std))),
+        model_error_scaled=beyond,
     )
     result.identified = {**assess_identifiability(result, fitted_channels),
                          **log_scale_identifiability(free, result.values, result.std, result.std_data, result.std_model)}
