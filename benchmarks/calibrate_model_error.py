@@ -172,10 +172,11 @@ def model_error_table(rows: list[dict], regime: str | None = None) -> dict:
                                  "mean_error": float(np.mean(err)), "rms_std_data": float(np.sqrt(np.mean(std ** 2))),
                                  "model_std": float(s)}
     formats = sorted({r.get("format", "?") for r in used})
-    # a film's table says how far the fits it was measured on missed x at most: beyond that a
-    # fit's model errors are scaled (identify.fitting.model_error.ModelError.beyond_measured)
+    # a film's clean table says how far the fits it was measured on missed x at most: beyond that
+    # a fit's model errors are scaled (identify.fitting.model_error.ModelError.beyond_measured;
+    # the clean table's, whatever the regime)
     misfit = [r["rms_mm"] / 1e3 for r in used if r.get("format") == "film" and r.get("rms_mm") is not None]
-    if misfit:
+    if misfit and regime is None:
         doc["misfit_x_m"] = round(float(max(misfit)), 6)
     seeds = sorted(r["seed"] for r in used)
     doc["source"] = (f"{len(used)} {worlds} ({', '.join(formats)}; seeds {seeds[0]}-{seeds[-1]}), "

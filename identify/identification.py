@@ -532,7 +532,7 @@ def fit_warnings(fr) -> list[str]:
     ``FitResult.PULL_CONFLICT`` sigma from what was known before the fit (a measured speed or
     contact, a vehicle file's engine mass): the model and the recording disagree there; and a
     fit that misses x beyond any fit the model's error was measured on (its errors scaled)."""
-    out = [f"every parameter's model error {fr.model_error_scaled}"] if getattr(fr, "model_error_scaled", "") else []
+    out = [f"every parameter's model error {fr.model_error_scaled}"] if fr.model_error_scaled else []
     out += [f"{name} ended {where} ({fr.values[name]:.4g} {fr.units[name]}): not identified; the fit's range, not"
            " the recording, set it (the model may be trading it against what it cannot explain)"
            for name, where in fr.at_bound.items()]

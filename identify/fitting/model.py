@@ -72,6 +72,15 @@ class FreeParameter:
             return self.centre + self.scale * jnp.tanh(u)
         return self.centre + self.scale * u
 
+    @property
+    def bounds(self) -> tuple[float, float] | None:
+        """(lower, upper) of the values the transform can reach, or None (``log``, ``linear``)."""
+        if self.transform == "logit":
+            return self.lower, self.upper
+        if self.transform == "tanh":
+            return self.centre - self.scale, self.centre + self.scale
+        return None
+
     AT_BOUND = 0.01  # within this share of its range of a bound, a value is "at its bound"
     RUNAWAY = 1e3  # a log-transformed value this many times its scale (or 1/this) has run away
 
@@ -87,12 +96,9 @@ class FreeParameter:
             if ratio >= self.RUNAWAY or ratio <= 1.0 / self.RUNAWAY:
                 return f"far outside any plausible value ({float(value):.3g} {self.unit}, {ratio:.2g} times its scale)"
             return ""
-        if self.transform == "logit":
-            lo, hi = self.lower, self.upper
-        elif self.transform == "tanh":
-            lo, hi = self.centre - self.scale, self.centre + self.scale
-        else:
+        if self.bounds is None:
             return ""
+        lo, hi = self.bounds
         share = (float(value) - lo) / (hi - lo)
         if share <= self.AT_BOUND and not self.floor_is_physical:
             return f"at its lower bound {lo:.4g} {self.unit}"
@@ -117,12 +123,9 @@ class FreeParameter:
         is the recording's answer, not a stop, and a start there stays: moved up, every later
         fit of the bundled sample (a nose that slides, friction 0) ran its logit down again
         and stopped at the step limit (the whole command 120 s against 64)."""
-        if self.transform == "logit":
-            lo, hi = self.lower, self.upper
-        elif self.transform == "tanh":
-            lo, hi = self.centre - self.scale, self.centre + self.scale
-        else:
+        if self.bounds is None:
             return float(value)
+        lo, hi = self.bounds
         margin = self.AT_BOUND * (hi - lo)
         floor = -math.inf if self.floor_is_physical else lo + margin
         return float(min(max(float(value), floor), hi - margin))
